@@ -1,0 +1,3 @@
+from armkit.cli import main
+
+main()

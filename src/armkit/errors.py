@@ -1,0 +1,46 @@
+"""The exceptions armkit raises: one tree under `ArmkitError`.
+
+A failed solve or an unreachable target is not an exception but a result (see `IKResult`);
+these are for misuse and bad input, with messages that say what was expected and what was found.
+"""
+
+from __future__ import annotations
+
+
+class ArmkitError(Exception):
+    """Base of every error armkit raises on purpose."""
+
+
+class InputError(ArmkitError, ValueError):
+    """An argument has the wrong shape, type or value.
+
+    Message shape: ``q: expected last axis 6, found 4``.
+    """
+
+
+class ModelFileError(InputError):
+    """A robot (or other) file is unreadable or invalid.
+
+    Parameters
+    ----------
+    file : str
+        The file's path as the user gave it.
+    field : str
+        Path of the offending field, e.g. ``joints[2].limits``; empty for the whole file.
+    expected, found : str
+        What the field should hold and what it holds.
+    """
+
+    def __init__(self, file: str, field: str, expected: str, found: str):
+        self.file, self.field, self.expected, self.found = str(file), field, expected, found
+        where = f"{self.file}: {field}" if field else self.file
+        super().__init__(f"{where}: expected {expected}, found {found}")
+
+
+class DriveError(ArmkitError):
+    """Talking to a motor drive failed; says why and the last waypoint the drive accepted."""
+
+    def __init__(self, cause: str, last_accepted: int | None = None):
+        self.cause, self.last_accepted = cause, last_accepted
+        last = "none" if last_accepted is None else str(last_accepted)
+        super().__init__(f"{cause} (last accepted waypoint: {last})")

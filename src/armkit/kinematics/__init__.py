@@ -1,0 +1,11 @@
+"""What a robot does, as pure functions of (robot, q): forward kinematics and Jacobians."""
+
+from armkit.kinematics.forward import fk, fk_frames, joint_frames
+from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,
+                                        jacobian_dot, manipulability, min_singular_value,
+                                        pose_and_jacobian, singular_values, tool_acceleration,
+                                        tool_velocity)
+
+__all__ = ["fk", "fk_frames", "joint_frames", "jacobian", "jacobian_analytic", "jacobian_dot",
+           "pose_and_jacobian", "tool_velocity", "tool_acceleration", "singular_values",
+           "manipulability", "min_singular_value", "condition_number"]

@@ -1,0 +1,162 @@
+"""numba kernels for the chain's hot paths, one sample per call of a `_one` function.
+
+A chain reaches the kernels as `KernelChain`: joint i turns about (or slides along) z of the
+frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion. A pose is carried
+as 12 scalars (rotation rows and position) so that the whole product stays in registers; the
+batch loops come twice, serial for small batches (no thread start-up) and parallel.
+
+benchmarks/fk.py measures these against a vectorised NumPy chain and roboticstoolbox's C++ code.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_jit = numba.njit(cache=True, nogil=True)
+_pjit = numba.njit(cache=True, nogil=True, parallel=True)
+
+PARALLEL_FROM = 2048        # samples; below this, thread start-up costs more than it saves
+
+
+@_jit
+def _start(pre):
+    return (pre[0, 0], pre[0, 1], pre[0, 2], pre[0, 3],
+            pre[1, 0], pre[1, 1], pre[1, 2], pre[1, 3],
+            pre[2, 0], pre[2, 1], pre[2, 2], pre[2, 3])
+
+
+@_jit
+def _move(T, kind, value):
+    """T @ Rz(value) for a revolute joint, T @ Tz(value) for a prismatic one."""
+    r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
+    if kind == 0:
+        c, s = math.cos(value), math.sin(value)
+        return (c * r00 + s * r01, c * r01 - s * r00, r02, p0,
+                c * r10 + s * r11, c * r11 - s * r10, r12, p1,
+                c * r20 + s * r21, c * r21 - s * r20, r22, p2)
+    return (r00, r01, r02, p0 + value * r02,
+            r10, r11, r12, p1 + value * r12,
+            r20, r21, r22, p2 + value * r22)
+
+
+@_jit
+def _then(T, C):
+    """T @ C for a constant rigid transform C (4, 4)."""
+    r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
+    return (r00 * C[0, 0] + r01 * C[1, 0] + r02 * C[2, 0],
+            r00 * C[0, 1] + r01 * C[1, 1] + r02 * C[2, 1],
+            r00 * C[0, 2] + r01 * C[1, 2] + r02 * C[2, 2],
+            r00 * C[0, 3] + r01 * C[1, 3] + r02 * C[2, 3] + p0,
+            r10 * C[0, 0] + r11 * C[1, 0] + r12 * C[2, 0],
+            r10 * C[0, 1] + r11 * C[1, 1] + r12 * C[2, 1],
+            r10 * C[0, 2] + r11 * C[1, 2] + r12 * C[2, 2],
+            r10 * C[0, 3] + r11 * C[1, 3] + r12 * C[2, 3] + p1,
+            r20 * C[0, 0] + r21 * C[1, 0] + r22 * C[2, 0],
+            r20 * C[0, 1] + r21 * C[1, 1] + r22 * C[2, 1],
+            r20 * C[0, 2] + r21 * C[1, 2] + r22 * C[2, 2],
+            r20 * C[0, 3] + r21 * C[1, 3] + r22 * C[2, 3] + p2)
+
+
+@_jit
+def _store(T, out):
+    """Write the 12-scalar pose T into out (4, 4)."""
+    for k in range(12):
+        out[k // 4, k % 4] = T[k]
+    out[3, 0] = 0.0
+    out[3, 1] = 0.0
+    out[3, 2] = 0.0
+    out[3, 3] = 1.0
+
+
+@_jit
+def pose_one(q, kinds, offsets, pre, links, out):
+    """Tool pose of one configuration q (n,) into out (4, 4)."""
+    T = _start(pre)
+    for i in range(q.shape[0]):
+        T = _then(_move(T, kinds[i], q[i] + offsets[i]), links[i])
+    _store(T, out)
+
+
+@_jit
+def frames_one(q, kinds, offsets, pre, links, joint_frames, out):
+    """Joint frames after each motion (n, 4, 4) (z is the joint axis) and the tool pose."""
+    T = _start(pre)
+    for i in range(q.shape[0]):
+        T = _move(T, kinds[i], q[i] + offsets[i])
+        _store(T, joint_frames[i])
+        T = _then(T, links[i])
+    _store(T, out)
+
+
+@_jit
+def pose_jacobian_one(q, kinds, offsets, pre, links, out, J):
+    """Tool pose into out (4, 4) and the geometric Jacobian (6, n), base frame, into J.
+
+    Column i: revolute ``(z_i x (p - o_i), z_i)``, prismatic ``(z_i, 0)``; z_i the joint axis,
+    o_i a point on it, p the tool origin.
+    """
+    n = q.shape[0]
+    T = _start(pre)
+    for i in range(n):
+        T = _move(T, kinds[i], q[i] + offsets[i])
+        J[0, i], J[1, i], J[2, i] = T[3], T[7], T[11]          # o_i, for now
+        J[3, i], J[4, i], J[5, i] = T[2], T[6], T[10]          # z_i
+        T = _then(T, links[i])
+    px, py, pz = T[3], T[7], T[11]
+    for i in range(n):
+        zx, zy, zz = J[3, i], J[4, i], J[5, i]
+        if kinds[i] == 0:
+            dx, dy, dz = px - J[0, i], py - J[1, i], pz - J[2, i]
+            J[0, i] = zy * dz - zz * dy
+            J[1, i] = zz * dx - zx * dz
+            J[2, i] = zx * dy - zy * dx
+        else:
+            J[0, i], J[1, i], J[2, i] = zx, zy, zz
+            J[3, i], J[4, i], J[5, i] = 0.0, 0.0, 0.0
+    _store(T, out)
+
+
+# --- batch loops: Q (N, n) -> outputs with leading N ------------------------------------------
+
+@_jit
+def poses(Q, kinds, offsets, pre, links, out):
+    for k in range(Q.shape[0]):
+        pose_one(Q[k], kinds, offsets, pre, links, out[k])
+
+
+@_pjit
+def poses_parallel(Q, kinds, offsets, pre, links, out):
+    for k in numba.prange(Q.shape[0]):
+        pose_one(Q[k], kinds, offsets, pre, links, out[k])
+
+
+@_jit
+def frames(Q, kinds, offsets, pre, links, joint_frames, out):
+    for k in range(Q.shape[0]):
+        frames_one(Q[k], kinds, offsets, pre, links, joint_frames[k], out[k])
+
+
+@_pjit
+def frames_parallel(Q, kinds, offsets, pre, links, joint_frames, out):
+    for k in numba.prange(Q.shape[0]):
+        frames_one(Q[k], kinds, offsets, pre, links, joint_frames[k], out[k])
+
+
+@_jit
+def pose_jacobians(Q, kinds, offsets, pre, links, out, J):
+    for k in range(Q.shape[0]):
+        pose_jacobian_one(Q[k], kinds, offsets, pre, links, out[k], J[k])
+
+
+@_pjit
+def pose_jacobians_parallel(Q, kinds, offsets, pre, links, out, J):
+    for k in numba.prange(Q.shape[0]):
+        pose_jacobian_one(Q[k], kinds, offsets, pre, links, out[k], J[k])
+
+
+def run(serial, parallel, Q: np.ndarray, *args) -> None:
+    """Call the serial or parallel batch loop, whichever suits the batch size."""
+    (parallel if Q.shape[0] >= PARALLEL_FROM else serial)(Q, *args)

@@ -1,0 +1,83 @@
+"""Forward kinematics: the tool pose and every link frame, batch-first."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armkit.kinematics import _kernels
+from armkit.model.robot import Robot, joint_array
+
+
+def fk(robot: Robot, q: ArrayLike) -> NDArray:
+    """Tool pose in the robot's base (world) frame.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (..., n)
+        Joint positions; rad for revolute, m for prismatic joints.
+
+    Returns
+    -------
+    T : ndarray, shape (..., 4, 4)
+        ``T_base_tool`` for each configuration.
+
+    Raises
+    ------
+    InputError
+        If the last axis of q is not robot.n, or q holds NaN or inf.
+
+    Example
+    -------
+    >>> armkit.fk(armkit.robot("ur5"), np.zeros(6))[:3, 3]
+    array([-0.81725, -0.19145, -0.005491])
+    """
+    q = joint_array(robot, q)
+    flat = q.reshape(-1, robot.n)
+    out = np.empty((flat.shape[0], 4, 4))
+    k = robot.chain.kernel
+    _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.kinds, k.offsets, k.pre,
+                 k.links, out)
+    return out.reshape(q.shape[:-1] + (4, 4))
+
+
+def joint_frames(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
+    """Each joint's frame after its motion, whose z axis is the joint axis, and the tool pose.
+
+    Returns
+    -------
+    frames : ndarray, shape (..., n, 4, 4)
+    T : ndarray, shape (..., 4, 4)
+    """
+    q = joint_array(robot, q)
+    flat = q.reshape(-1, robot.n)
+    frames = np.empty((flat.shape[0], robot.n, 4, 4))
+    out = np.empty((flat.shape[0], 4, 4))
+    k = robot.chain.kernel
+    _kernels.run(_kernels.frames, _kernels.frames_parallel, flat, k.kinds, k.offsets, k.pre,
+                 k.links, frames, out)
+    lead = q.shape[:-1]
+    return frames.reshape(lead + (robot.n, 4, 4)), out.reshape(lead + (4, 4))
+
+
+def fk_frames(robot: Robot, q: ArrayLike) -> NDArray:
+    """Every link frame: the base, then the frame after each joint (the tool pose last).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., n)
+
+    Returns
+    -------
+    frames : ndarray, shape (..., n + 1, 4, 4)
+        ``frames[..., 0]`` is ``T_base``; ``frames[..., i]`` is link frame i (for DH tables the
+        DH frame i, for URDF the child link of joint i); ``frames[..., n]`` is the tool pose.
+    """
+    moved, T = joint_frames(robot, q)
+    lead = T.shape[:-2]
+    out = np.empty(lead + (robot.n + 1, 4, 4))
+    out[..., 0, :, :] = robot.chain.T_base
+    out[..., 1:robot.n, :, :] = moved[..., :-1, :, :] @ robot.chain.kernel.after
+    out[..., robot.n, :, :] = T
+    return out

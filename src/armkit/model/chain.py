@@ -1,0 +1,196 @@
+"""The canonical serial chain that every robot description compiles into.
+
+A chain of n joints maps joint positions q (rad for revolute, m for prismatic joints) to the
+tool pose
+
+    T_base_tool(q) = T_base @ prod_i [ T_before_i @ M_i(q_i + offset_i) @ T_after_i ] @ T_tool
+
+where ``M_i`` rotates about (revolute) or translates along (prismatic) the unit ``axis_i``,
+expressed in the joint frame ``T_before_i`` places. Link frame i is the frame after
+``T_after_i``: standard DH puts its fixed part there (``Rz Tz | Tx Rx``), modified DH and URDF
+put theirs before the motion, so each front-end keeps its own link frames.
+
+At construction the chain is also compiled into the form the kernels use: every axis turned
+onto z, and the fixed transforms between two motions multiplied out (``pre``, ``links``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armkit.errors import InputError
+
+JointKind = Literal["revolute", "prismatic"]
+KINDS: tuple[str, ...] = ("revolute", "prismatic")
+
+
+def _frozen(a: ArrayLike) -> NDArray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2).
+
+    Velocity and acceleration are ``inf`` where none is given.
+    """
+
+    lower: float
+    upper: float
+    velocity: float = np.inf
+    acceleration: float = np.inf
+
+    def __post_init__(self):
+        if not self.lower < self.upper:
+            raise InputError(f"limits: expected lower < upper, found {self.lower} and {self.upper}")
+        if not (self.velocity > 0 and self.acceleration > 0):
+            raise InputError(f"limits: expected positive velocity and acceleration limits, "
+                             f"found {self.velocity} and {self.acceleration}")
+
+
+@dataclass(frozen=True, eq=False)
+class Joint:
+    """One moving joint: ``T_before @ M(q + offset) @ T_after``.
+
+    Parameters
+    ----------
+    name : str
+    kind : {"revolute", "prismatic"}
+    axis : array_like, shape (3,)
+        Direction of the motion in the joint frame (normalised here).
+    limits : Limits
+        On the joint value q (before the offset is added).
+    T_before, T_after : array_like, shape (4, 4)
+        Fixed transforms before and after the motion; identity if omitted.
+    offset : float
+        Added to q before the motion (rad or m): the joint's value at q = 0.
+    """
+
+    name: str
+    kind: JointKind
+    axis: NDArray
+    limits: Limits
+    T_before: NDArray = field(default_factory=lambda: np.eye(4))
+    T_after: NDArray = field(default_factory=lambda: np.eye(4))
+    offset: float = 0.0
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise InputError(f"joint {self.name}: expected kind revolute or prismatic, "
+                             f"found {self.kind!r}")
+        axis = np.asarray(self.axis, dtype=float)
+        norm = np.linalg.norm(axis) if axis.shape == (3,) else 0.0
+        if not norm > 1e-9:
+            raise InputError(f"joint {self.name}: expected a non-zero 3-vector axis, found {axis}")
+        object.__setattr__(self, "axis", _frozen(axis / norm))
+        object.__setattr__(self, "T_before", _frozen(self.T_before))
+        object.__setattr__(self, "T_after", _frozen(self.T_after))
+        object.__setattr__(self, "offset", float(self.offset))
+
+
+def _rotation_onto_z(axis: NDArray) -> NDArray:
+    """A 4x4 rotation R with ``R @ e_z = axis`` (for a unit axis)."""
+    z = np.array([0.0, 0.0, 1.0])
+    v, c = np.cross(z, axis), float(z @ axis)
+    R = np.eye(4)
+    if c < -1.0 + 1e-12:                       # axis = -z: half turn about x
+        R[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    else:                                      # Rodrigues for the shortest arc
+        K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+        R[:3, :3] = np.eye(3) + K + K @ K / (1.0 + c)
+    return R
+
+
+@dataclass(frozen=True, eq=False)
+class Chain:
+    """A serial chain of moving joints between a base and a tool transform.
+
+    Parameters
+    ----------
+    joints : sequence of Joint
+    T_base : array_like, shape (4, 4)
+        The first joint's parent frame in the world (robot base) frame.
+    T_tool : array_like, shape (4, 4)
+        The tool frame in the last link's frame.
+
+    Attributes
+    ----------
+    lower, upper : ndarray, shape (n,)
+        Position limits (rad or m).
+    velocity_limits, acceleration_limits : ndarray, shape (n,)
+        Per joint (/s, /s^2); inf where none is given.
+    revolute : ndarray of bool, shape (n,)
+    kernel : KernelChain
+        The compiled form the kinematics kernels take.
+    """
+
+    joints: tuple[Joint, ...]
+    T_base: NDArray = field(default_factory=lambda: np.eye(4))
+    T_tool: NDArray = field(default_factory=lambda: np.eye(4))
+    lower: NDArray = field(init=False, repr=False)
+    upper: NDArray = field(init=False, repr=False)
+    velocity_limits: NDArray = field(init=False, repr=False)
+    acceleration_limits: NDArray = field(init=False, repr=False)
+    revolute: NDArray = field(init=False, repr=False)
+    kernel: KernelChain = field(init=False, repr=False)
+
+    def __post_init__(self):
+        joints = tuple(self.joints)
+        if not joints:
+            raise InputError("chain: expected at least one moving joint, found none")
+        def set_(name, value):
+            object.__setattr__(self, name, value)
+
+        set_("joints", joints)
+        set_("T_base", _frozen(self.T_base))
+        set_("T_tool", _frozen(self.T_tool))
+        set_("lower", _frozen([j.limits.lower for j in joints]))
+        set_("upper", _frozen([j.limits.upper for j in joints]))
+        set_("velocity_limits", _frozen([j.limits.velocity for j in joints]))
+        set_("acceleration_limits", _frozen([j.limits.acceleration for j in joints]))
+        revolute = np.array([j.kind == "revolute" for j in joints])
+        revolute.setflags(write=False)
+        set_("revolute", revolute)
+        # Kernel form: joint i rotates about / slides along z of frame pre @ ... @ links[i-1].
+        align = [_rotation_onto_z(j.axis) for j in joints]
+        after = [R.T @ j.T_after for R, j in zip(align, joints)]
+        links = [after[i] @ joints[i + 1].T_before @ align[i + 1]
+                 for i in range(len(joints) - 1)] + [after[-1] @ self.T_tool]
+        kinds = np.where(revolute, 0, 1).astype(np.int64)
+        kinds.setflags(write=False)
+        set_("kernel", KernelChain(
+            kinds=kinds, offsets=_frozen([j.offset for j in joints]),
+            pre=_frozen(self.T_base @ joints[0].T_before @ align[0]),
+            links=_frozen(links), after=_frozen(np.reshape(after[:-1], (-1, 4, 4)))))
+
+    @property
+    def n(self) -> int:
+        """Number of moving joints."""
+        return len(self.joints)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Joint names, in chain order."""
+        return tuple(j.name for j in self.joints)
+
+
+@dataclass(frozen=True, eq=False)
+class KernelChain:
+    """The chain as the numba kernels take it (all axes on z).
+
+    kinds (n,) int: 0 revolute, 1 prismatic; offsets (n,); pre (4, 4): base up to joint 1's
+    motion; links (n, 4, 4): from joint i's motion to joint i+1's (the last ends at the tool);
+    after (n - 1, 4, 4): from joint i's motion to link frame i (the last link frame is the tool).
+    """
+
+    kinds: NDArray
+    offsets: NDArray
+    pre: NDArray
+    links: NDArray
+    after: NDArray

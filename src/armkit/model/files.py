@@ -1,0 +1,395 @@
+"""Robot files (YAML) to validated robots, and back; the built-in robots.
+
+A robot file declares its units and convention, then its joints in those units::
+
+    name: water_supply
+    units: {length: mm, angle: deg}
+    convention: mdh            # dh | mdh | poe | urdf
+    base: {xyz: [0, 0, 0], rpy: [0, 0, 0]}    # optional
+    tool: {xyz: [0, 0, 0], rpy: [0, 0, 0]}    # optional
+    joints:
+      - {name: lift, type: prismatic, alpha: 0, a: 0, d: 0, theta: 0, limits: [0, 600]}
+
+DH rows take ``alpha a d theta``; screw rows (``poe``) take ``axis`` and ``point`` and the file a
+``home`` pose; a ``urdf`` file names ``urdf: path`` (relative to the file) and optionally ``tip``.
+Every mistake raises one `ModelFileError` naming the file, the field, what was expected and
+what was found.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+import yaml
+from pydantic import (BaseModel, ConfigDict, Field, ValidationError, field_validator,
+                      model_validator)
+
+from armkit.errors import InputError, ModelFileError
+from armkit.model.chain import Limits
+from armkit.model.dh import DHRow, DHTable, chain_from_dh
+from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
+from armkit.model.robot import Robot, Units
+from armkit.model.urdf import URDFTable, chain_from_urdf, read_urdf
+from armkit.spatial import matrix_to_rpy, pose_from_xyz_rpy
+
+Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class PoseField(_Strict):
+    xyz: Vector3 = [0.0, 0.0, 0.0]
+    rpy: Vector3 = [0.0, 0.0, 0.0]
+
+
+class UnitsField(_Strict):
+    length: Literal["mm", "m"]
+    angle: Literal["deg", "rad"]
+
+
+class _JointField(_Strict):
+    name: str | None = None
+    limits: list[float] | None = None
+    velocity: float | None = Field(None, gt=0)
+    acceleration: float | None = Field(None, gt=0)
+
+    @field_validator("limits")
+    @classmethod
+    def _ordered(cls, v):
+        if v is not None and (len(v) != 2 or not v[0] < v[1]):
+            raise ValueError(f"expected [lower, upper] with lower < upper, found {v}")
+        return v
+
+
+class DHJointField(_JointField):
+    type: Literal["revolute", "prismatic", "fixed"]
+    alpha: float
+    a: float
+    d: float
+    theta: float
+
+    @model_validator(mode="after")
+    def _limits_match_type(self):
+        if self.type == "prismatic" and self.limits is None:
+            raise ValueError("expected limits [lower, upper] for a prismatic joint, found none")
+        if self.type == "fixed" and (self.limits or self.velocity or self.acceleration):
+            raise ValueError("expected no limits on a fixed row, found some")
+        return self
+
+
+class ScrewJointField(_JointField):
+    type: Literal["revolute", "prismatic"]
+    axis: Vector3
+    point: Vector3 | None = None
+
+    @model_validator(mode="after")
+    def _complete(self):
+        if math.hypot(*self.axis) < 1e-9:
+            raise ValueError(f"expected a non-zero axis, found {self.axis}")
+        if self.type == "revolute" and self.point is None:
+            raise ValueError("expected a point on the axis of a revolute joint, found none")
+        if self.type == "prismatic" and self.limits is None:
+            raise ValueError("expected limits [lower, upper] for a prismatic joint, found none")
+        return self
+
+
+class _RobotField(_Strict):
+    name: str
+    description: str = ""
+    units: UnitsField
+    convention: Literal["dh", "mdh", "poe", "urdf"]
+    base: PoseField | None = None
+    tool: PoseField | None = None
+
+
+class DHFile(_RobotField):
+    joints: list[DHJointField] = Field(min_length=1)
+
+
+class ScrewFile(_RobotField):
+    home: PoseField
+    joints: list[ScrewJointField] = Field(min_length=1)
+
+
+class URDFFile(_RobotField):
+    urdf: str
+    tip: str | None = None
+
+
+FILE_MODELS = {"dh": DHFile, "mdh": DHFile, "poe": ScrewFile, "urdf": URDFFile}
+
+
+# --- reading ---------------------------------------------------------------------------------
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """safe_load that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key {key!r} given twice", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Parse a YAML file safely; any failure is a ModelFileError naming the line."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as err:
+        raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f"line {mark.line + 1}" if mark else ""
+        problem = getattr(err, "problem", None) or str(err)
+        raise ModelFileError(str(path), where, "valid YAML", problem) from None
+
+
+def _field_path(loc: tuple) -> str:
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+def _found(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def validation_error(path: str, err: ValidationError, model: type[BaseModel]) -> ModelFileError:
+    """The first error of a pydantic ValidationError as one precise ModelFileError."""
+    first = err.errors()[0]
+    loc, kind, msg = tuple(first["loc"]), first["type"], first["msg"]
+    if kind == "missing":
+        return ModelFileError(path, _field_path(loc), "a value", "nothing")
+    if kind == "extra_forbidden":
+        known = _fields_at(model, loc[:-1])
+        hint = difflib.get_close_matches(str(loc[-1]), known, n=1)
+        expected = f"one of {', '.join(known)}" + (f" (did you mean {hint[0]!r}?)" if hint else "")
+        return ModelFileError(path, _field_path(loc[:-1]) or "top level", expected,
+                              f"unknown field {loc[-1]!r}")
+    if msg.startswith("Value error, expected "):
+        expected, _, found = msg.removeprefix("Value error, expected ").partition(", found ")
+        return ModelFileError(path, _field_path(loc), expected, found or _found(first["input"]))
+    expected = msg.removeprefix("Input should be ").removeprefix("Value error, ")
+    return ModelFileError(path, _field_path(loc), expected, _found(first.get("input")))
+
+
+def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
+    """Field names allowed at `loc` of a robot file, for 'did you mean'."""
+    nested = {"units": UnitsField, "base": PoseField, "tool": PoseField, "home": PoseField,
+              "joints": model.model_fields["joints"].annotation.__args__[0]
+              if "joints" in model.model_fields else None}
+    inner = nested.get(loc[0]) if loc else model
+    return list(inner.model_fields) if inner else []
+
+
+def parse_robot(document: Any, path: str = "<robot>") -> Robot:
+    """A Robot from a parsed robot document (a mapping, file units); `path` names it in errors.
+
+    Raises
+    ------
+    ModelFileError
+    """
+    if not isinstance(document, dict):
+        raise ModelFileError(path, "", "a mapping of fields (name, units, convention, ...)",
+                             type(document).__name__)
+    convention = document.get("convention")
+    if convention not in FILE_MODELS:
+        raise ModelFileError(path, "convention", "one of dh, mdh, poe, urdf",
+                             _found(convention) if "convention" in document else "nothing")
+    model = FILE_MODELS[convention]
+    try:
+        spec = model.model_validate(document)
+    except ValidationError as err:
+        raise validation_error(path, err, model) from None
+    units = Units(spec.units.length, spec.units.angle)
+    T_base, T_tool = _pose(spec.base, units), _pose(spec.tool, units)
+    if isinstance(spec, URDFFile):
+        found = read_urdf(Path(path).parent / spec.urdf, spec.tip)
+        table = URDFTable(spec.urdf, found.tip, found.joints, T_base, T_tool)
+        chain = chain_from_urdf(table)
+    elif isinstance(spec, ScrewFile):
+        rows = tuple(_screw_row(j, i, units) for i, j in enumerate(spec.joints))
+        table = ScrewTable(rows, _pose(spec.home, units), T_base, T_tool)
+        chain = chain_from_poe(table)
+    else:
+        rows = tuple(_dh_row(j, i, units) for i, j in enumerate(spec.joints))
+        if all(r.kind == "fixed" for r in rows):
+            raise ModelFileError(path, "joints", "at least one revolute or prismatic joint",
+                                 "only fixed rows")
+        table = DHTable(rows, convention == "mdh", T_base, T_tool)
+        chain = chain_from_dh(table)
+    return Robot(spec.name, chain, units, spec.description, table)
+
+
+def _pose(pose: PoseField | None, units: Units) -> np.ndarray:
+    if pose is None:
+        return np.eye(4)
+    return pose_from_xyz_rpy(units.length_to_si(pose.xyz), units.angle_to_si(pose.rpy))
+
+
+def _limits(joint: _JointField, kind: str, units: Units) -> Limits | None:
+    if kind == "fixed":
+        return None
+    to_si = units.angle_to_si if kind == "revolute" else units.length_to_si
+    lower, upper = joint.limits if joint.limits is not None else (-math.pi, math.pi)
+    if joint.limits is not None:
+        lower, upper = float(to_si(lower)), float(to_si(upper))
+    velocity, acceleration = (np.inf if v is None else float(to_si(v))
+                              for v in (joint.velocity, joint.acceleration))
+    return Limits(lower, upper, velocity, acceleration)
+
+
+def _dh_row(joint: DHJointField, i: int, units: Units) -> DHRow:
+    return DHRow(joint.type, float(units.angle_to_si(joint.alpha)),
+                 float(units.length_to_si(joint.a)), float(units.length_to_si(joint.d)),
+                 float(units.angle_to_si(joint.theta)), joint.name or f"q{i + 1}",
+                 _limits(joint, joint.type, units))
+
+
+def _screw_row(joint: ScrewJointField, i: int, units: Units) -> ScrewRow:
+    point = None if joint.point is None else units.length_to_si(joint.point)
+    return ScrewRow(joint.type, np.asarray(joint.axis, dtype=float),
+                    _limits(joint, joint.type, units), point, joint.name or f"q{i + 1}")
+
+
+def load_robot(path: str | Path) -> Robot:
+    """Load a robot from a YAML robot file or a URDF file (.urdf: SI units).
+
+    Raises
+    ------
+    ModelFileError
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".urdf":
+        table = read_urdf(path)
+        return Robot(path.stem, chain_from_urdf(table), Units("m", "rad"), "", table)
+    return parse_robot(read_yaml(path), str(path))
+
+
+# --- writing ---------------------------------------------------------------------------------
+
+def _num(x: float) -> float:
+    """A file value without the last-bit noise of the unit conversion (12 significant digits)."""
+    return float(f"{float(x):.12g}")
+
+
+def _nums(xs) -> list[float]:
+    return [_num(x) for x in np.asarray(xs, dtype=float).ravel()]
+
+
+def _pose_doc(T: np.ndarray, units: Units) -> dict:
+    return {"xyz": _nums(units.length_from_si(T[:3, 3])),
+            "rpy": _nums(units.angle_from_si(matrix_to_rpy(T[:3, :3])))}
+
+
+def _limits_doc(limits: Limits | None, kind: str, units: Units) -> dict:
+    if limits is None or not np.isfinite(limits.lower):
+        return {}
+    from_si = units.angle_from_si if kind == "revolute" else units.length_from_si
+    doc = {"limits": _nums(from_si([limits.lower, limits.upper]))}
+    for key in ("velocity", "acceleration"):
+        value = getattr(limits, key)
+        if np.isfinite(value):
+            doc[key] = _num(from_si(value))
+    return doc
+
+
+def robot_document(robot: Robot) -> dict:
+    """The robot as a robot-file document (a dict in the robot's units), ready for YAML.
+
+    Raises
+    ------
+    InputError
+        If the robot was not built from a table (DH, screws or URDF).
+    """
+    u, table = robot.units, robot.table
+    doc: dict[str, Any] = {"name": robot.name}
+    if robot.description:
+        doc["description"] = robot.description
+    doc["units"] = {"length": u.length, "angle": u.angle}
+    if isinstance(table, DHTable):
+        doc["convention"] = "mdh" if table.modified else "dh"
+    elif isinstance(table, ScrewTable):
+        doc["convention"] = "poe"
+    elif isinstance(table, URDFTable):
+        doc.update(convention="urdf", urdf=table.path, tip=table.tip)
+    else:
+        raise InputError(f"robot {robot.name}: expected one built from a DH, screw or URDF "
+                         f"table, found table {type(table).__name__}")
+    for key, T in (("base", table.T_base), ("tool", table.T_tool)):
+        if not np.allclose(T, np.eye(4), atol=1e-15):
+            doc[key] = _pose_doc(T, u)
+    if isinstance(table, DHTable):
+        doc["joints"] = [{"name": r.name, "type": r.kind,
+                          "alpha": _num(u.angle_from_si(r.alpha)),
+                          "a": _num(u.length_from_si(r.a)), "d": _num(u.length_from_si(r.d)),
+                          "theta": _num(u.angle_from_si(r.theta)),
+                          **_limits_doc(r.limits, r.kind, u)} for r in table.rows]
+    elif isinstance(table, ScrewTable):
+        doc["home"] = _pose_doc(table.T_home, u)
+        doc["joints"] = [{"name": r.name, "type": r.kind, "axis": _nums(r.axis),
+                          **({} if r.point is None else
+                             {"point": _nums(u.length_from_si(r.point))}),
+                          **_limits_doc(r.limits, r.kind, u)} for r in table.rows]
+    return doc
+
+
+def save_robot(robot: Robot, path: str | Path) -> None:
+    """Write the robot as a YAML robot file that `load_robot` reads back to the same robot."""
+    text = yaml.safe_dump(robot_document(robot), sort_keys=False, default_flow_style=None)
+    Path(path).write_text(text, encoding="utf-8")
+
+
+# --- built-in robots -------------------------------------------------------------------------
+
+def _builtin_dir():
+    return resources.files("armkit.model") / "robots"
+
+
+def robots() -> list[str]:
+    """Names of the built-in robots, sorted."""
+    return sorted(p.name.removesuffix(".yaml") for p in _builtin_dir().iterdir()
+                  if p.name.endswith(".yaml"))
+
+
+def robot(name_or_path: str | Path | Robot) -> Robot:
+    """A robot from a built-in name, a YAML robot file or a URDF file.
+
+    Example
+    -------
+    >>> armkit.robot("ur5").n
+    6
+
+    Raises
+    ------
+    ModelFileError
+        If the file is invalid.
+    InputError
+        If the name is neither built in nor an existing file.
+    """
+    if isinstance(name_or_path, Robot):
+        return name_or_path
+    text = str(name_or_path)
+    if text in robots():
+        with resources.as_file(_builtin_dir() / f"{text}.yaml") as path:
+            return load_robot(path)
+    if Path(text).is_file():
+        return load_robot(text)
+    hint = difflib.get_close_matches(text, robots(), n=1)
+    raise InputError(f"robot: expected a built-in name ({', '.join(robots())}) or a robot file, "
+                     f"found {text!r}" + (f" (did you mean {hint[0]!r}?)" if hint else ""))

@@ -1,0 +1,130 @@
+"""A robot: its chain, plus the name, units and source table that people and files speak in."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armkit.errors import InputError
+from armkit.model.chain import Chain
+
+
+@dataclass(frozen=True)
+class Units:
+    """The units a robot file and the command line speak in; everything inside is SI.
+
+    Parameters
+    ----------
+    length : {"m", "mm"}
+    angle : {"rad", "deg"}
+    """
+
+    length: Literal["m", "mm"] = "m"
+    angle: Literal["rad", "deg"] = "rad"
+
+    # mm -> m divides by 1000 (correctly rounded for decimal file values such as 525.5);
+    # deg <-> rad goes through numpy's deg2rad / rad2deg.
+    def length_to_si(self, x: ArrayLike) -> NDArray:
+        x = np.asarray(x, dtype=float)
+        return x / 1000.0 if self.length == "mm" else x
+
+    def length_from_si(self, x: ArrayLike) -> NDArray:
+        x = np.asarray(x, dtype=float)
+        return x * 1000.0 if self.length == "mm" else x
+
+    def angle_to_si(self, x: ArrayLike) -> NDArray:
+        x = np.asarray(x, dtype=float)
+        return np.deg2rad(x) if self.angle == "deg" else x
+
+    def angle_from_si(self, x: ArrayLike) -> NDArray:
+        x = np.asarray(x, dtype=float)
+        return np.rad2deg(x) if self.angle == "deg" else x
+
+
+SI = Units()
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """What a robot is: a chain of joints, with the description it was compiled from.
+
+    Parameters
+    ----------
+    name : str
+    chain : Chain
+        The canonical chain every kinematics function works on (SI).
+    units : Units
+        The units of the robot's file; used at the edges (files, command line) only.
+    description : str
+    table : DHTable, ScrewTable, URDFTable or None
+        The source description in SI, kept for display, saving and kinematic calibration.
+    """
+
+    name: str
+    chain: Chain
+    units: Units = SI
+    description: str = ""
+    table: object = None
+
+    @property
+    def n(self) -> int:
+        """Number of moving joints."""
+        return self.chain.n
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return self.chain.names
+
+    @property
+    def lower(self) -> NDArray:
+        """Lower position limits (n,), rad or m."""
+        return self.chain.lower
+
+    @property
+    def upper(self) -> NDArray:
+        """Upper position limits (n,), rad or m."""
+        return self.chain.upper
+
+    def q_to_si(self, q: ArrayLike) -> NDArray:
+        """Joint values (..., n) from file units (deg, mm, ...) to rad and m."""
+        q = np.asarray(q, dtype=float)
+        return np.where(self.chain.revolute, self.units.angle_to_si(q), self.units.length_to_si(q))
+
+    def q_from_si(self, q: ArrayLike) -> NDArray:
+        """Joint values (..., n) from rad and m to file units."""
+        q = np.asarray(q, dtype=float)
+        return np.where(self.chain.revolute, self.units.angle_from_si(q),
+                        self.units.length_from_si(q))
+
+    def __repr__(self) -> str:
+        kinds = "".join("R" if r else "P" for r in self.chain.revolute)
+        return f"Robot({self.name!r}, {self.n} joints {kinds}, units {self.units.length}/{self.units.angle})"
+
+
+def joint_array(robot: Robot, q: ArrayLike, name: str = "q") -> NDArray:
+    """`q` as a C-contiguous float array (..., n) of finite joint values for `robot`.
+
+    Raises
+    ------
+    InputError
+        ``q: expected last axis 6 (the joints of ur5), found 4``, or a non-finite value.
+    """
+    try:
+        a = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected numbers, found {type(q).__name__}") from None
+    if a.ndim == 0 or a.shape[-1] != robot.n:
+        found = a.shape[-1] if a.ndim else "a scalar"
+        raise InputError(f"{name}: expected last axis {robot.n} (the joints of {robot.name}), "
+                         f"found {found}")
+    a = np.ascontiguousarray(a)
+    # For a few values, a Python check is several times cheaper than two ufunc calls.
+    finite = (all(map(math.isfinite, a.ravel().tolist())) if a.size <= 64
+              else bool(np.isfinite(a).all()))
+    if not finite:
+        raise InputError(f"{name}: expected finite joint values, found NaN or inf")
+    return a

@@ -1,0 +1,61 @@
+"""Forward kinematics: batch shapes, input checks, frames, large batches."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import armkit
+from armkit.errors import InputError
+from armkit.kinematics import _kernels
+from tests.helpers import random_q
+
+
+@pytest.mark.parametrize("lead", [(), (7,), (2, 3)])
+def test_leading_shapes_match_single_calls(any_robot, lead):
+    Q = random_q(any_robot, lead if lead else 1)[0] if not lead else random_q(any_robot, lead)
+    T, F = armkit.fk(any_robot, Q), armkit.fk_frames(any_robot, Q)
+    assert T.shape == lead + (4, 4) and F.shape == lead + (any_robot.n + 1, 4, 4)
+    flat_q, flat_T = Q.reshape(-1, any_robot.n), T.reshape(-1, 4, 4)
+    for q, Tk in zip(flat_q, flat_T):
+        np.testing.assert_array_equal(armkit.fk(any_robot, q), Tk)
+    np.testing.assert_array_equal(F[..., -1, :, :], T)                  # the tool is last
+    np.testing.assert_array_equal(F[..., 0, :, :], np.broadcast_to(any_robot.chain.T_base, T.shape))
+
+
+def test_serial_and_parallel_kernels_agree():
+    robot = armkit.robot("panda")
+    Q = random_q(robot, _kernels.PARALLEL_FROM + 5)
+    k = robot.chain.kernel
+    a, b = np.empty((len(Q), 4, 4)), np.empty((len(Q), 4, 4))
+    _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, a)
+    _kernels.poses_parallel(Q, k.kinds, k.offsets, k.pre, k.links, b)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_rotation_stays_orthonormal_over_a_large_batch():
+    robot = armkit.robot("ur5")
+    T = armkit.fk(robot, random_q(robot, 100_000))
+    R = T[:, :3, :3]
+    assert np.abs(R @ np.swapaxes(R, 1, 2) - np.eye(3)).max() < 1e-14
+    assert np.all(T[:, 3] == [0, 0, 0, 1])
+
+
+def test_accepts_lists_and_integer_arrays():
+    robot = armkit.robot("ur5")
+    np.testing.assert_array_equal(armkit.fk(robot, [0, 1, 0, 0, 0, 0]),
+                                  armkit.fk(robot, np.array([0, 1, 0, 0, 0, 0])))
+
+
+@pytest.mark.parametrize("q, words", [
+    (np.zeros(4), "q: expected last axis 6 (the joints of ur5), found 4"),
+    (np.zeros((3, 5)), "found 5"),
+    (1.0, "found a scalar"),
+    ([0, 0, np.nan, 0, 0, 0], "q: expected finite joint values, found NaN or inf"),
+    (np.full((100, 6), np.inf), "NaN or inf"),
+    ("abc", "q: expected numbers, found str"),
+])
+def test_bad_q_is_refused_with_its_reason(q, words):
+    with pytest.raises(InputError) as err:
+        armkit.fk(armkit.robot("ur5"), q)
+    assert words in str(err.value)

@@ -1,0 +1,139 @@
+"""Robot files: YAML round trip, and one precise message per mistake (file, field, expected, found)."""
+
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+import pytest
+import yaml
+
+import armkit
+from armkit.errors import InputError, ModelFileError
+from armkit.model import load_robot, robot_document, save_robot
+from tests.helpers import random_q
+
+GOOD = """\
+name: arm
+units: {length: mm, angle: deg}
+convention: dh
+joints:
+  - {name: a, type: revolute, alpha: 90, a: 0, d: 100, theta: 0, limits: [-90, 90]}
+  - {name: b, type: revolute, alpha: 0, a: 300, d: 0, theta: 0, limits: [-90, 90]}
+  - {name: c, type: prismatic, alpha: 0, a: 0, d: 0, theta: 0, limits: [0, 200]}
+"""
+
+
+def test_round_trip_of_every_builtin(any_robot, tmp_path):
+    path = tmp_path / "robot.yaml"
+    save_robot(any_robot, path)
+    again = load_robot(path)
+    assert robot_document(again) == robot_document(any_robot)
+    Q = random_q(any_robot, 50)
+    np.testing.assert_allclose(armkit.fk(again, Q), armkit.fk(any_robot, Q), atol=1e-13)
+    for key in ("lower", "upper", "velocity_limits", "acceleration_limits"):
+        np.testing.assert_allclose(getattr(again.chain, key), getattr(any_robot.chain, key),
+                                   rtol=1e-12)
+
+
+def test_saved_file_keeps_the_file_units_and_values(tmp_path):
+    path = tmp_path / "ws.yaml"
+    save_robot(armkit.robot("water_supply"), path)
+    doc = yaml.safe_load(path.read_text())
+    assert doc["units"] == {"length": "mm", "angle": "deg"}
+    assert doc["joints"][0]["d"] == 525.5                  # not 525.5000000000001
+    assert doc["joints"][4]["a"] == 352.5 and doc["joints"][4]["limits"] == [-180, 180]
+
+
+def test_units_convert_to_si(tmp_path):
+    path = tmp_path / "arm.yaml"
+    path.write_text(GOOD)
+    robot = load_robot(path)
+    assert robot.upper == pytest.approx([np.pi / 2, np.pi / 2, 0.2])
+    np.testing.assert_allclose(robot.q_to_si([90, 45, 150]), [np.pi / 2, np.pi / 4, 0.15])
+    np.testing.assert_allclose(robot.q_from_si(robot.q_to_si([90, 45, 150])), [90, 45, 150])
+
+
+def write(tmp_path, text: str):
+    path = tmp_path / "bad.yaml"
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def broken(tmp_path, old: str, new: str):
+    assert old in GOOD
+    return write(tmp_path, GOOD.replace(old, new))
+
+
+@pytest.mark.parametrize("old, new, field, words", [
+    ("units: {length: mm, angle: deg}\n", "", "units", "expected a value, found nothing"),
+    ("length: mm", "length: inch", "units.length", "'mm' or 'm', found 'inch'"),
+    ("convention: dh", "convention: xyz", "convention", "one of dh, mdh, poe, urdf"),
+    ("a: 300", "a: three hundred", "joints[1].a", "a valid number"),
+    ("limits: [-90, 90]}\n  - {name: b", "limits: [90, -90]}\n  - {name: b", "joints[0].limits",
+     "lower < upper, found [90.0, -90.0]"),
+    ("limits: [0, 200]", "velocity: 10", "joints[2]", "limits [lower, upper] for a prismatic"),
+    ("theta: 0, limits: [0, 200]", "theta: 0, limts: [0, 200]", "joints[2]",
+     "unknown field 'limts'"),
+    ("type: prismatic", "type: spherical", "joints[2].type",
+     "'revolute', 'prismatic' or 'fixed'"),
+    ("name: arm\n", "", "name", "a value"),
+    ("joints:\n", "joints: 3\nx:\n", "", ""),
+])
+def test_each_mistake_names_its_field(tmp_path, old, new, field, words):
+    path = broken(tmp_path, old, new)
+    with pytest.raises(ModelFileError) as err:
+        load_robot(path)
+    message = str(err.value)
+    assert message.startswith(str(path)), message
+    assert f": {field}:" in message or not field, message
+    assert words in message, message
+
+
+def test_unknown_field_suggests_the_near_one(tmp_path):
+    with pytest.raises(ModelFileError, match=r"did you mean 'limits'\?"):
+        load_robot(broken(tmp_path, "theta: 0, limits: [0, 200]", "theta: 0, limts: [0, 200]"))
+
+
+def test_yaml_syntax_error_names_the_line(tmp_path):
+    with pytest.raises(ModelFileError, match=r"bad.yaml: line 3: expected valid YAML, found expected ',' or '}'"):
+        load_robot(write(tmp_path, "name: a\nunits: {length: mm\nconvention: dh\njoints: [\n"))
+
+
+def test_duplicate_key_is_refused(tmp_path):
+    with pytest.raises(ModelFileError, match="key 'name' given twice"):
+        load_robot(write(tmp_path, GOOD + "name: again\n"))
+
+
+def test_not_a_mapping(tmp_path):
+    with pytest.raises(ModelFileError, match="expected a mapping of fields .*found list"):
+        load_robot(write(tmp_path, "- 1\n- 2\n"))
+
+
+def test_missing_file():
+    with pytest.raises(ModelFileError, match="nowhere.yaml: expected a readable file"):
+        load_robot("nowhere.yaml")
+
+
+def test_only_fixed_rows(tmp_path):
+    text = GOOD.split("joints:")[0] + "joints:\n  - {type: fixed, alpha: 0, a: 0, d: 1, theta: 0}\n"
+    with pytest.raises(ModelFileError, match="joints: expected at least one revolute or prismatic"):
+        load_robot(write(tmp_path, text))
+
+
+@pytest.mark.parametrize("joint, field, words", [
+    ("{type: revolute, axis: [0, 0, 1], limits: [-1, 1]}", "joints[0]", "a point on the axis"),
+    ("{type: revolute, axis: [0, 0, 0], point: [0, 0, 0]}", "joints[0]", "a non-zero axis"),
+    ("{type: revolute, axis: [0, 1], point: [0, 0, 0]}", "joints[0].axis", "at least 3 items"),
+])
+def test_screw_file_mistakes(tmp_path, joint, field, words):
+    text = ("name: s\nunits: {length: mm, angle: deg}\nconvention: poe\n"
+            f"home: {{xyz: [1, 0, 0]}}\njoints:\n  - {joint}\n")
+    with pytest.raises(ModelFileError) as err:
+        load_robot(write(tmp_path, text))
+    assert f": {field}: expected" in str(err.value) and words in str(err.value), str(err.value)
+
+
+def test_unknown_builtin_name_suggests_one():
+    with pytest.raises(InputError, match=r"found 'ur6' \(did you mean 'ur5'\?\)"):
+        armkit.robot("ur6")
