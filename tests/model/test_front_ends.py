@@ -123,3 +123,14 @@ def test_any_screw_axis(axis):
     R = np.eye(3) + np.sin(t) * K + (1 - np.cos(t)) * K @ K
     expected = R @ (np.array([1.0, 0.5, 0.2]) - point) + point
     np.testing.assert_allclose(armkit.fk(robot, [t])[:3, 3], expected, atol=1e-15)
+
+
+def test_home_screws_reproduce_fk(any_robot):
+    """T(q) = exp([S_1] q_1) ... exp([S_n] q_n) T_home, for every built-in robot."""
+    from armkit.spatial import exp_se3
+    chain = any_robot.chain
+    for q in random_q(any_robot, 20, seed=6):
+        T = np.eye(4)
+        for S, qi in zip(chain.screws, q):
+            T = T @ exp_se3(S * qi)
+        np.testing.assert_allclose(T @ chain.T_home, armkit.fk(any_robot, q), atol=1e-12)

@@ -107,6 +107,16 @@ def _rotation_onto_z(axis: NDArray) -> NDArray:
     return R
 
 
+def _motion_along_z(kind: str, value: float) -> NDArray:
+    M = np.eye(4)
+    if kind == "revolute":
+        c, s = np.cos(value), np.sin(value)
+        M[:2, :2] = [[c, -s], [s, c]]
+    else:
+        M[2, 3] = value
+    return M
+
+
 @dataclass(frozen=True, eq=False)
 class Chain:
     """A serial chain of moving joints between a base and a tool transform.
@@ -126,6 +136,13 @@ class Chain:
     velocity_limits, acceleration_limits : ndarray, shape (n,)
         Per joint (/s, /s^2); inf where none is given.
     revolute : ndarray of bool, shape (n,)
+    screws : ndarray, shape (n, 6)
+        Each joint's space-frame screw ``(v, w)`` at q = 0 (product-of-exponentials form:
+        ``T(q) = exp([S_1] q_1) ... exp([S_n] q_n) @ T_home``); a prismatic screw is ``(w, 0)``.
+    points : ndarray, shape (n, 3)
+        A point on each joint's axis at q = 0 (base frame).
+    T_home : ndarray, shape (4, 4)
+        The tool pose at q = 0.
     kernel : KernelChain
         The compiled form the kinematics kernels take.
     """
@@ -138,6 +155,9 @@ class Chain:
     velocity_limits: NDArray = field(init=False, repr=False)
     acceleration_limits: NDArray = field(init=False, repr=False)
     revolute: NDArray = field(init=False, repr=False)
+    screws: NDArray = field(init=False, repr=False)
+    points: NDArray = field(init=False, repr=False)
+    T_home: NDArray = field(init=False, repr=False)
     kernel: KernelChain = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -168,6 +188,17 @@ class Chain:
             kinds=kinds, offsets=_frozen([j.offset for j in joints]),
             pre=_frozen(self.T_base @ joints[0].T_before @ align[0]),
             links=_frozen(links), after=_frozen(np.reshape(after[:-1], (-1, 4, 4)))))
+        # Screws at home: walk the kernel form at q = 0 (each joint at its offset).
+        T, screws, points = self.kernel.pre, [], []
+        for j, link in zip(joints, self.kernel.links):
+            T = T @ _motion_along_z(j.kind, j.offset)
+            w, r = T[:3, 2], T[:3, 3]
+            screws.append(np.r_[-np.cross(w, r), w] if j.kind == "revolute" else np.r_[w, 0, 0, 0])
+            points.append(r)
+            T = T @ link
+        set_("screws", _frozen(screws))
+        set_("points", _frozen(points))
+        set_("T_home", _frozen(T))
 
     @property
     def n(self) -> int:

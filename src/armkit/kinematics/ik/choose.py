@@ -1,0 +1,59 @@
+"""Choosing among solutions: folding angles into the limits, and the criteria for the best."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from armkit.errors import InputError
+from armkit.model.robot import Robot
+
+CRITERIA = {
+    "nearest": "weighted distance to the current configuration (sum of w_i dq_i^2)",
+    "least_travel": "longest joint travel time at the velocity limits (max |dq_i| / v_i)",
+    "manipulability": "largest manipulability (Yoshikawa), farthest from singularities",
+    "limits": "farthest from the joint limits (smallest margin over range, largest)",
+}
+
+
+def fold_into_limits(robot: Robot, q: NDArray, q_ref: NDArray) -> NDArray:
+    """Revolute angles moved by whole turns into the limits, nearest q_ref; (..., n).
+
+    Tries the turn nearest q_ref and its two neighbours (enough for ranges up to four turns);
+    an angle with none of them inside its limits is left as it is (and fails the limit check).
+    """
+    turn = 2 * np.pi
+    nearest = q + turn * np.round((q_ref - q) / turn)
+    out, gap = q.copy(), np.full(q.shape, np.inf)
+    for shift in (0.0, -turn, turn):
+        c = nearest + shift
+        take = (robot.chain.revolute & (c >= robot.lower) & (c <= robot.upper)
+                & (np.abs(c - q_ref) < gap))
+        out = np.where(take, c, out)
+        gap = np.where(take, np.abs(c - q_ref), gap)
+    return out
+
+
+def within_limits(robot: Robot, q: NDArray, slack: float = 1e-12) -> NDArray:
+    """Whether each configuration (..., n) is inside the joint limits; (...,)."""
+    return np.all((q >= robot.lower - slack) & (q <= robot.upper + slack), axis=-1)
+
+
+def scores(robot: Robot, q: NDArray, q_ref: NDArray, criterion: str,
+           weights: NDArray | None) -> NDArray:
+    """Cost of each candidate (..., K, n) under the criterion, lower is better; (..., K)."""
+    if criterion not in CRITERIA:
+        raise InputError(f"criterion: expected one of {', '.join(CRITERIA)}, found {criterion!r}")
+    dq = q - q_ref[..., None, :]
+    if criterion == "nearest":
+        w = np.ones(robot.n) if weights is None else weights
+        return np.sum(w * dq**2, axis=-1)
+    if criterion == "least_travel":
+        v = np.where(np.isfinite(robot.chain.velocity_limits), robot.chain.velocity_limits, 1.0)
+        return np.max(np.abs(dq) / v, axis=-1)
+    if criterion == "manipulability":
+        from armkit.kinematics.jacobian import manipulability
+        return -manipulability(robot, np.nan_to_num(q))
+    span = np.where(np.isfinite(robot.upper - robot.lower), robot.upper - robot.lower, np.inf)
+    margin = np.minimum(q - robot.lower, robot.upper - q) / span
+    return -np.min(margin, axis=-1)
