@@ -23,7 +23,7 @@ from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
 
 METHODS = ("auto", "analytic", "lm", "newton")
-SEEDS = 4           # nearest sampled configurations tried first by the numeric solvers
+SEEDS = 8           # nearest sampled configurations tried first by the numeric solvers
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,9 @@ class IKResult:
     success : ndarray of bool, (...,)
         Within both tolerances under the mask, and within the joint limits.
     q : ndarray, (..., n)
-        The chosen solution; on failure the best configuration found.
+        The chosen solution. On failure the best configuration found: for "outside joint
+        limits" the solution nearest q0, outside the limits; otherwise the one closest to
+        the target.
     position_error : ndarray, (...,)
         m, by forward kinematics of q.
     rotation_error : ndarray, (...,)
@@ -122,7 +124,7 @@ def _check(robot, T, q, mask, tol_position, tol_rotation):
 def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
        mask: str | ArrayLike | None = None, method: str = "auto", criterion: str = "nearest",
        weights: ArrayLike | None = None, tol_position: float = 1e-9, tol_rotation: float = 1e-9,
-       max_iter: int = 30, restarts: int = 60, seed: int = 0) -> IKResult:
+       max_iter: int = 20, restarts: int = 250, seed: int = 0) -> IKResult:
     """Joint positions that put the tool at the target pose.
 
     Parameters
@@ -183,6 +185,12 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     if method == "analytic" and family is None:
         raise InputError(f"method: expected 'auto', 'lm' or 'newton' for {robot.name}, found "
                          f"'analytic' (its geometry has no closed form here)")
+    # A closed form solves its own task; a looser task (fewer flags) is the numeric solver's.
+    if family is not None and not np.all(mask >= np.array(family.mask, dtype=bool)):
+        if method == "analytic":
+            raise InputError(f"mask: expected one that includes {mask_name(np.array(family.mask, bool))} "
+                             f"for the closed form of {robot.name}, found {mask_name(mask)}")
+        family = None
     N = flat_T.shape[0]
     q = q_ref.copy()
     iterations = np.zeros(N, dtype=np.int64)
@@ -207,9 +215,14 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         first = q[idx] if family is not None and method == "auto" else q_ref[idx]
         if q0 is not None or family is not None:
             starts = np.concatenate([first[:, None, :], starts[:, :-1]], axis=1)
-        q_num, _, its = numeric.solve(robot, flat_T[idx], starts, mask, solver[idx][0],
-                                      tol_position, tol_rotation, max_iter, restarts, seed)
-        q[idx], iterations[idx] = q_num, its
+        # Beyond the reach bound no start can succeed: one attempt finds the closest pose.
+        beyond = (np.linalg.norm(flat_T[idx, :3, 3] - robot.chain.points[0], axis=-1)
+                  > reach_bound(robot) * (1 + 1e-9))
+        for part, tries in ((~beyond, restarts), (beyond, 0)):
+            if part.any():
+                q[idx[part]], _, iterations[idx[part]] = numeric.solve(
+                    robot, flat_T[idx[part]], starts[part], mask, solver[idx][0], tol_position,
+                    tol_rotation, max_iter, tries, seed)
     pe, re, reached, inside = _check(robot, flat_T, q, mask, tol_position, tol_rotation)
     success = reached & inside
     if numeric_targets.any():
