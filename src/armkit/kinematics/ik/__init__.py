@@ -82,10 +82,10 @@ class IKSolutions:
     mask: str
 
 
-def default_mask(robot: Robot) -> NDArray:
+def default_mask(robot: Robot, family: analytic.Family | None = None) -> NDArray:
     """The task a robot can do exactly: a closed form's own task, a full pose for six or more
     joints, else the position."""
-    family = analytic.family_of(robot.chain)
+    family = family or analytic.family_of(robot.chain)
     if family is not None:
         return np.array(family.mask, dtype=bool)
     return as_mask("pose" if robot.n >= 6 else "position")
@@ -168,7 +168,8 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     lead = T.shape[:-2]
     flat_T = T.reshape(-1, 4, 4)
     q_ref = np.ascontiguousarray(_start(robot, q0, lead).reshape(-1, robot.n))
-    mask = default_mask(robot) if mask is None else as_mask(mask)
+    family = analytic.family_of(robot.chain)
+    mask = default_mask(robot, family) if mask is None else as_mask(mask)
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, found {method!r}")
     if criterion not in CRITERIA:
@@ -181,7 +182,6 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     if max_iter < 1 or restarts < 0:
         raise InputError(f"max_iter, restarts: expected >= 1 and >= 0, found {max_iter}, "
                          f"{restarts}")
-    family = analytic.family_of(robot.chain)
     if method == "analytic" and family is None:
         raise InputError(f"method: expected 'auto', 'lm' or 'newton' for {robot.name}, found "
                          f"'analytic' (its geometry has no closed form here)")
@@ -208,16 +208,16 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         reason[reason_cf == "near"] = "out of reach"
     if numeric_targets.any():
         idx = np.flatnonzero(numeric_targets)
-        starts = numeric.seed_starts(robot, flat_T[idx], mask, reach_bound(robot) / 4,
-                                     count=SEEDS, samples=min(4096, max(512, 8 * len(idx))),
-                                     seed=seed)
+        bound = reach_bound(robot)
+        starts = numeric.seed_starts(robot, flat_T[idx], mask, bound / 4, count=SEEDS,
+                                     samples=min(4096, max(256, 8 * len(idx))), seed=seed)
         # The closed form's nearest branch, or the given q0, goes first.
         first = q[idx] if family is not None and method == "auto" else q_ref[idx]
         if q0 is not None or family is not None:
             starts = np.concatenate([first[:, None, :], starts[:, :-1]], axis=1)
         # Beyond the reach bound no start can succeed: one attempt finds the closest pose.
         beyond = (np.linalg.norm(flat_T[idx, :3, 3] - robot.chain.points[0], axis=-1)
-                  > reach_bound(robot) * (1 + 1e-9))
+                  > bound * (1 + 1e-9))
         for part, tries in ((~beyond, restarts), (beyond, 0)):
             if part.any():
                 q[idx[part]], _, iterations[idx[part]] = numeric.solve(

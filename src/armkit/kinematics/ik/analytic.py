@@ -22,6 +22,7 @@ are checked by forward kinematics elsewhere (``armkit.ik``): nothing here decide
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -153,15 +154,20 @@ def _axes(chain: Chain):
     return w, chain.points
 
 
+def _cross3(a, b) -> tuple[float, float, float]:
+    """Cross product of two 3-vectors as floats (cheaper than NumPy for one pair)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
 def _parallel(a, b) -> bool:
-    return np.linalg.norm(_cross(a, b)) < PARALLEL
+    return math.hypot(*_cross3(a, b)) < PARALLEL
 
 
 def _line_distance(w1, r1, w2, r2) -> float:
-    n = _cross(w1, w2)
-    if np.linalg.norm(n) < PARALLEL:
-        return float(np.linalg.norm(_cross(r2 - r1, w1)))
-    return float(abs(np.dot(r2 - r1, n)) / np.linalg.norm(n))
+    n, d = _cross3(w1, w2), r2 - r1
+    if math.hypot(*n) < PARALLEL:
+        return math.hypot(*_cross3(d, w1))
+    return abs(n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / math.hypot(*n)
 
 
 def _meeting_point(w1, r1, w2, r2) -> NDArray:

@@ -16,7 +16,8 @@ step is taken with the others (a bound-constrained Gauss-Newton step). An attemp
 reached the tolerances after ``max_iter`` iterations (or whose lambda grows past 1e8) starts
 again: from the next of the given starts, then from configurations drawn uniformly inside the
 limits (a splitmix64 stream per target, seeded from ``seed`` and the target's index, so results
-do not depend on thread scheduling).
+do not depend on thread scheduling). If every attempt fails, the best point found gets one
+last run of ten times ``max_iter`` (near a singularity convergence is slow, not absent).
 """
 
 from __future__ import annotations
@@ -265,83 +266,98 @@ def workspace(n, m):
 
 
 @_jit
+def _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows, tol_p, tol_r,
+             iterations, method, ws):
+    """One attempt from q (updated in place to where it ends): (converged, cost, iterations).
+
+    LM only keeps steps that lower the cost, so it ends at its best point; Newton takes every
+    step and stops when the step vanishes.
+    """
+    n = q.shape[0]
+    _, q_new, dq, free, T, J, T2, J2, e, A, e2, A2, E, w, Hn, gn, Hm, gm, y = ws
+    pose_jacobian_one(q, kinds, offsets, pre, links, T, J)
+    cost = _residual(T, J, Tt, rows, e, A, E, w)
+    lam = 1e-3 if method == LM else 1e-15
+    for it in range(iterations):
+        ep, er = task_errors_one(T, Tt, mask)
+        if ep < tol_p and er < tol_r:
+            return True, cost, it
+        for j in range(n):
+            free[j] = True
+        if not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
+            lam *= 10.0
+            if lam > MAX_LAMBDA:
+                return False, cost, it + 1
+            continue
+        # Hold the joints this step pushes past a limit, and step with the others.
+        held = False
+        for j in range(n):
+            if not turn[j] and ((q[j] <= lower[j] and dq[j] < 0.0)
+                                or (q[j] >= upper[j] and dq[j] > 0.0)):
+                free[j] = False
+                held = True
+        if held and not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
+            lam *= 10.0
+            if lam > MAX_LAMBDA:
+                return False, cost, it + 1
+            continue
+        size = _bounded(q, dq, lower, upper, turn, q_new)
+        pose_jacobian_one(q_new, kinds, offsets, pre, links, T2, J2)
+        new_cost = _residual(T2, J2, Tt, rows, e2, A2, E, w)
+        if method == NEWTON or new_cost < cost:
+            for j in range(n):
+                q[j] = q_new[j]
+            T, T2, J, J2, e, e2, A, A2 = T2, T, J2, J, e2, e, A2, A
+            cost = new_cost
+            lam = max(lam / 10.0, 1e-15)
+            if method == NEWTON and size < 1e-15:       # no step left: a stationary point
+                return False, cost, it + 1
+        else:
+            lam *= 10.0
+            if lam > MAX_LAMBDA:
+                return False, cost, it + 1
+    ep, er = task_errors_one(T, Tt, mask)
+    return ep < tol_p and er < tol_r, cost, iterations
+
+
+@_jit
 def solve_one(Tt, starts, kinds, offsets, pre, links, lower, upper, turn, sample_lo, sample_hi,
               mask, rows, tol_p, tol_r, max_iter, restarts, method, state, q_out, ws):
-    """Solve one target from starts (S, n) then random restarts; q_out gets the best q found.
-
-    Returns (converged, iterations).
-    """
+    """Solve one target from starts (S, n), then random restarts, then a long polish of the
+    best point found; q_out gets the solution or that best point. Returns
+    (converged, iterations)."""
     n = starts.shape[1]
-    q, q_new, dq, free, T, J, T2, J2, e, A, e2, A2, E, w, Hn, gn, Hm, gm, y = ws
-    best = np.inf
-    iterations = 0
+    q, dq = ws[0], ws[2]
+    best, total = np.inf, 0
     for attempt in range(restarts + 1):
         for j in range(n):
             if attempt < starts.shape[0]:
-                v = starts[attempt, j]
+                q[j] = starts[attempt, j]
             else:
                 state, u = _random(state)
-                v = sample_lo[j] + u * (sample_hi[j] - sample_lo[j])
+                q[j] = sample_lo[j] + u * (sample_hi[j] - sample_lo[j])
             dq[j] = 0.0
-            q[j] = v
         _bounded(q, dq, lower, upper, turn, q)
-        pose_jacobian_one(q, kinds, offsets, pre, links, T, J)
-        cost = _residual(T, J, Tt, rows, e, A, E, w)
-        lam = 1e-3 if method == LM else 1e-15
-        for _ in range(max_iter):
-            ep, er = task_errors_one(T, Tt, mask)
-            if ep < tol_p and er < tol_r:
-                for j in range(n):
-                    q_out[j] = q[j]
-                return True, iterations
-            if cost < best:
-                best = cost
-                for j in range(n):
-                    q_out[j] = q[j]
-            iterations += 1
-            for j in range(n):
-                free[j] = True
-            if not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
-                lam *= 10.0
-                if lam > MAX_LAMBDA:
-                    break
-                continue
-            # Hold the joints this step pushes past a limit, and step with the others.
-            held = False
-            for j in range(n):
-                if not turn[j] and ((q[j] <= lower[j] and dq[j] < 0.0)
-                                    or (q[j] >= upper[j] and dq[j] > 0.0)):
-                    free[j] = False
-                    held = True
-            if held and not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
-                lam *= 10.0
-                if lam > MAX_LAMBDA:
-                    break
-                continue
-            size = _bounded(q, dq, lower, upper, turn, q_new)
-            pose_jacobian_one(q_new, kinds, offsets, pre, links, T2, J2)
-            new_cost = _residual(T2, J2, Tt, rows, e2, A2, E, w)
-            if method == NEWTON or new_cost < cost:
-                q, q_new = q_new, q
-                T, T2, J, J2, e, e2, A, A2 = T2, T, J2, J, e2, e, A2, A
-                cost = new_cost
-                lam = max(lam / 10.0, 1e-15)
-                if method == NEWTON and size < 1e-15:   # no step left: a stationary point
-                    break
-            else:
-                lam *= 10.0
-                if lam > MAX_LAMBDA:
-                    break
-        ep, er = task_errors_one(T, Tt, mask)
-        if ep < tol_p and er < tol_r:
-            for j in range(n):
-                q_out[j] = q[j]
-            return True, iterations
-        if cost < best:
+        ok, cost, its = _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask,
+                                 rows, tol_p, tol_r, max_iter, method, ws)
+        total += its
+        if ok or cost < best:
             best = cost
             for j in range(n):
                 q_out[j] = q[j]
-    return False, iterations
+        if ok:
+            return True, total
+    # Near a singularity convergence slows down: an attempt may end close to a solution it
+    # had no time to reach. Give the best point a long last run.
+    for j in range(n):
+        q[j] = q_out[j]
+    ok, cost, its = _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows,
+                             tol_p, tol_r, 10 * max_iter, method, ws)
+    total += its
+    if ok or cost < best:
+        for j in range(n):
+            q_out[j] = q[j]
+    return ok, total
 
 
 @_jit
@@ -428,9 +444,9 @@ def seed_starts(robot, targets: np.ndarray, mask: np.ndarray, length: float, cou
     """Starts (N, count, n) for targets (N, 4, 4): the joint vectors of the `count` nearest of
     `samples` configurations drawn inside the limits.
 
-    Nearest by `_features` (position and the constrained tool axes), among the 2 x count
-    nearest by position alone: a 3-D tree answers many times faster than one over all the
-    features, and the start it gives is as good. The draw and its forward kinematics are paid
+    Nearest by `_features` (position and the constrained tool axes); for a large batch, among
+    the 2 x count nearest by position alone: a 3-D tree answers many times faster than one over
+    all the features, and the start it gives is as good. The draw and its forward kinematics are paid
     once per batch; a start near the target turns most solves into a few Gauss-Newton steps.
     """
     chain = robot.chain
@@ -439,9 +455,14 @@ def seed_starts(robot, targets: np.ndarray, mask: np.ndarray, length: float, cou
     rng = np.random.default_rng([seed, 0x5EED])
     Q = rng.uniform(lo, hi, (samples, robot.n))
     T = fk(robot, Q)
+    N = targets.shape[0]
+    wanted = _features(targets, mask, length)
+    if N * samples <= 200_000:              # a few targets: plain distances beat a tree
+        d = _features(T, mask, length)[None, :, :] - wanted[:, None, :]
+        return Q[np.argsort(np.einsum("nkd,nkd->nk", d, d), axis=1)[:, :count]]
     near = min(2 * count, samples)
     _, idx = cKDTree(T[:, :3, 3]).query(targets[:, :3, 3], k=near, workers=-1)
-    idx = np.reshape(idx, (targets.shape[0], near))
-    d = _features(T, mask, length)[idx] - _features(targets, mask, length)[:, None, :]
+    idx = np.reshape(idx, (N, near))
+    d = _features(T, mask, length)[idx] - wanted[:, None, :]
     best = np.argsort(np.einsum("nkd,nkd->nk", d, d), axis=1)[:, :count]
     return Q[np.take_along_axis(idx, best, axis=1)]
