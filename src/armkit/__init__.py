@@ -12,6 +12,7 @@ from armkit.errors import ArmkitError, DriveError, InputError, ModelFileError
 from armkit.kinematics import (condition_number, fk, fk_frames, jacobian, jacobian_analytic,
                                jacobian_dot, manipulability, min_singular_value,
                                singular_values, tool_acceleration, tool_velocity)
+from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
 from armkit.model import Robot, load_robot, robot, robots, save_robot
 
 __version__ = "0.1.0"
@@ -19,4 +20,5 @@ __version__ = "0.1.0"
 __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot", "robot",
            "robots", "load_robot", "save_robot", "fk", "fk_frames", "jacobian",
            "jacobian_analytic", "jacobian_dot", "tool_velocity", "tool_acceleration",
-           "singular_values", "manipulability", "min_singular_value", "condition_number"]
+           "singular_values", "manipulability", "min_singular_value", "condition_number",
+           "ik", "ik_solutions", "IKResult", "IKSolutions"]
