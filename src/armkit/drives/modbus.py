@@ -348,9 +348,7 @@ class DriveClient:
             waypoint: 3; whether the drive took waypoint 4 is unknown)``.
         """
         blocks = self.map.encode(check_waypoints(self.map, q, t)).tolist()
-        if self._client.socket is None:
-            self.connect()
-        self._prepare()
+        self._start()
         started = time.perf_counter()
         indices = []
         for k, block in enumerate(blocks):
@@ -369,14 +367,17 @@ class DriveClient:
         """
         block = self.map.encode(check_waypoints(self.map, q)[0]).tolist()
         if self._index is None:
-            if self._client.socket is None:
-                self.connect()
-            self._prepare()
+            self._start()
         return self._write(0, block)
 
-    def _prepare(self) -> None:
-        """Before the first waypoint: no fault, the drive's index, the enable flag set."""
+    def _start(self) -> None:
+        """Before the first waypoint: connected, no fault, the drive's index, enable set."""
         m = self.map
+        if self._client.socket is None:
+            try:
+                self.connect()
+            except DriveError as err:
+                raise DriveError(err.cause, None, waypoint=0) from None
         try:
             values = self._read(m.ack_reads)
             status = self._status(values, np.full(m.n, np.nan))
@@ -461,7 +462,7 @@ def send_waypoints(register_map: RegisterMap, q: ArrayLike, t: ArrayLike | None 
                    retries: int = 0, ack_timeout: float = 1.0) -> SendResult:
     """Check a sequence of waypoints, then send it to a drive over Modbus TCP.
 
-    Opens a `DriveClient`, sends, closes. Parameters as `DriveClient` and `DriveClient.send`.
+    Checks, connects, sends, closes. Parameters as `DriveClient` and `DriveClient.send`.
 
     Raises
     ------
@@ -470,7 +471,9 @@ def send_waypoints(register_map: RegisterMap, q: ArrayLike, t: ArrayLike | None 
     DriveError
         Which waypoint failed, why, the last one the drive accepted.
     """
-    q = check_waypoints(register_map, q, t)
-    with DriveClient(register_map, host, port, timeout=timeout, retries=retries,
-                     ack_timeout=ack_timeout) as drive:
-        return drive.send(q, t)
+    drive = DriveClient(register_map, host, port, timeout=timeout, retries=retries,
+                        ack_timeout=ack_timeout)
+    try:
+        return drive.send(q, t)        # checks before it connects
+    finally:
+        drive.close()
