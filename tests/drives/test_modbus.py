@@ -210,3 +210,14 @@ def test_drive_error_keeps_the_old_signature():
     err = DriveError("no connection", 4)
     assert str(err) == "no connection (last accepted waypoint: 4)"
     assert err.waypoint is None and not err.outcome_unknown
+
+
+def test_the_readme_example_runs(monkeypatch):
+    import armkit
+    from tests.drives.conftest import ROOT
+    text = (ROOT / "README.md").read_text().split("## Motor drives over Modbus TCP", 1)[1]
+    code = text.split("```python", 1)[1].split("```", 1)[0]
+    monkeypatch.chdir(ROOT)
+    scope = {"np": np, "armkit": armkit}
+    exec(code, scope)                                             # noqa: S102 (our README)
+    assert scope["result"].last_accepted == 2

@@ -48,7 +48,10 @@ DataType = Literal["int16", "uint16", "int32", "float32"]
 Order = Literal["big", "little"]
 # Big-endian NumPy types: the bytes come out in Modbus order, high byte first.
 DTYPES = {"int16": ">i2", "uint16": ">u2", "int32": ">i4", "float32": ">f4"}
+COUNTS = {"int16": 1, "uint16": 1, "int32": 2, "float32": 2}
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+RANGES = {kind: ((-FLOAT32_MAX, FLOAT32_MAX) if kind == "float32" else
+                 (float(np.iinfo(t).min), float(np.iinfo(t).max))) for kind, t in DTYPES.items()}
 
 Address = Annotated[int, Field(ge=0, le=65535, strict=True)]
 
@@ -90,6 +93,50 @@ class RegisterMapFile(_Strict):
 
 # --- the model ---------------------------------------------------------------------------------
 
+def to_words(values: ArrayLike, kind: str, scale: ArrayLike = 1.0, word_order: str = "big",
+             byte_order: str = "big", names: tuple[str, ...] = ("value",)) -> NDArray:
+    """Values x scale as registers: shape (...) to (..., count), uint16.
+
+    `scale` broadcasts against `values` (one per joint along the last axis, say); integer types
+    round to the nearest count. `names` name the values along the last axis in messages.
+
+    Raises
+    ------
+    InputError
+        If a value does not fit the data type at this scale.
+    """
+    counts = np.asarray(values, dtype=float) * scale
+    if kind != "float32":
+        counts = np.rint(counts)
+    lo, hi = RANGES[kind]
+    if not ((counts >= lo) & (counts <= hi)).all():
+        bad = ~((counts >= lo) & (counts <= hi)).reshape(-1, len(names)).all(axis=0)
+        raise InputError(f"{', '.join(n for n, b in zip(names, bad) if b)}: expected values "
+                         f"within {lo:g}..{hi:g} counts for {kind}, found "
+                         f"{counts.min():g}..{counts.max():g}")
+    # asarray first: NumPy makes 0-d results scalars, whose astype drops the byte order.
+    raw = np.asarray(counts).astype(DTYPES[kind])         # big-endian, high byte first
+    words = raw.reshape(raw.shape + (1,)).view(">u2")     # (..., count), high word first
+    if byte_order == "little":
+        words = words.byteswap()
+    if word_order == "little":
+        words = words[..., ::-1]
+    return words.astype(np.uint16)
+
+
+def from_words(words: ArrayLike, kind: str, scale: ArrayLike = 1.0, word_order: str = "big",
+               byte_order: str = "big") -> NDArray:
+    """Registers (..., count) to values (...): the inverse of `to_words`."""
+    words = np.asarray(words, dtype=np.uint16)
+    if word_order == "little":
+        words = words[..., ::-1]
+    words = words.astype(">u2")
+    if byte_order == "little":
+        words = words.byteswap()
+    counts = np.ascontiguousarray(words).view(DTYPES[kind])[..., 0]
+    return counts.astype(float) / scale
+
+
 @dataclass(frozen=True)
 class JointRegister:
     """Where and how one joint's position lives in the drive.
@@ -120,54 +167,39 @@ class JointRegister:
     @property
     def count(self) -> int:
         """Registers one value takes: 1 or 2."""
-        return 2 if self.type in ("int32", "float32") else 1
+        return COUNTS[self.type]
 
     @property
     def counts_range(self) -> tuple[float, float]:
         """Smallest and largest number the data type holds."""
-        if self.type == "float32":
-            return -FLOAT32_MAX, FLOAT32_MAX
-        info = np.iinfo(DTYPES[self.type])
-        return float(info.min), float(info.max)
+        return RANGES[self.type]
 
     def counts(self, value: ArrayLike) -> NDArray:
         """File-unit values (...) to the numbers the registers hold (rounded for integers)."""
         raw = np.asarray(value, dtype=float) * self.scale
-        # asarray again: NumPy turns 0-d results into scalars, whose astype ignores byte order.
-        return np.asarray(raw if self.type == "float32" else np.rint(raw))
+        return raw if self.type == "float32" else np.rint(raw)
 
     def words(self, value: ArrayLike) -> NDArray:
-        """File-unit values (...) to registers (..., count), uint16.
-
-        Raises
-        ------
-        InputError
-            If a value does not fit the data type at this scale.
-        """
-        counts = self.counts(value)
-        lo, hi = self.counts_range
-        if not np.all((counts >= lo) & (counts <= hi)):
-            raise InputError(f"joint {self.name}: expected values within {lo:g}..{hi:g} "
-                             f"counts for {self.type}, found {counts.min():g}..{counts.max():g}")
-        raw = counts.astype(DTYPES[self.type]).reshape(counts.shape + (1,))
-        octets = raw.view(np.uint8)                                # (..., 2 * count)
-        if self.byte_order == "little":
-            octets = octets.reshape(counts.shape + (self.count, 2))[..., ::-1]
-            octets = octets.reshape(counts.shape + (2 * self.count,))
-        words = (octets[..., 0::2].astype(np.uint16) << 8) | octets[..., 1::2]
-        return words[..., ::-1] if self.word_order == "little" else words
+        """File-unit values (...) to registers (..., count), uint16 (see `to_words`)."""
+        return to_words(value, self.type, self.scale, self.word_order, self.byte_order,
+                        (f"joint {self.name}",))
 
     def value(self, words: ArrayLike) -> NDArray:
-        """Registers (..., count) to file-unit values (...); the inverse of `words`."""
-        words = np.asarray(words, dtype=np.uint16)
-        if self.word_order == "little":
-            words = words[..., ::-1]
-        octets = np.stack([words >> 8, words & 0xFF], axis=-1).astype(np.uint8)
-        if self.byte_order == "little":
-            octets = octets[..., ::-1]
-        raw = np.ascontiguousarray(octets.reshape(words.shape[:-1] + (2 * self.count,)))
-        counts = raw.view(DTYPES[self.type])[..., 0]
-        return counts.astype(float) / self.scale
+        """Registers (..., count) to file-unit values (...)."""
+        return from_words(words, self.type, self.scale, self.word_order, self.byte_order)
+
+
+@dataclass(frozen=True)
+class _Group:
+    """Joints sharing one encoding, encoded together: their indices, scales, block columns."""
+
+    kind: str
+    word_order: str
+    byte_order: str
+    joints: NDArray
+    scales: NDArray
+    columns: NDArray
+    names: tuple[str, ...]
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,6 +248,7 @@ class RegisterMap:
     block_start: int = field(init=False)
     block_count: int = field(init=False)
     ack_reads: tuple[tuple[int, int], ...] = field(init=False)
+    _groups: tuple[_Group, ...] = field(init=False, repr=False)
 
     def __post_init__(self):
         block = [a for j in self.joints for a in range(j.target, j.target + j.count)]
@@ -224,9 +257,18 @@ class RegisterMap:
         start = min(block)
         needed = set(block) if self.readback else set()
         needed |= {a for a in (self.accepted, self.state, self.fault) if a is not None}
+        groups: dict[tuple[str, str, str], list[int]] = {}
+        for i, j in enumerate(self.joints):
+            groups.setdefault((j.type, j.word_order, j.byte_order), []).append(i)
         object.__setattr__(self, "block_start", start)
         object.__setattr__(self, "block_count", max(block) - start + 1)
         object.__setattr__(self, "ack_reads", runs(needed, MAX_READ))
+        object.__setattr__(self, "_groups", tuple(
+            _Group(*key, np.array(index), np.array([self.joints[i].scale for i in index]),
+                   np.array([a - start for i in index for a in range(
+                       self.joints[i].target, self.joints[i].target + COUNTS[key[0]])]),
+                   tuple(f"joint {self.joints[i].name}" for i in index))
+            for key, index in groups.items()))
 
     @property
     def n(self) -> int:
@@ -242,20 +284,33 @@ class RegisterMap:
         InputError
             If q has the wrong last axis, or a value does not fit its data type.
         """
-        q_file = self.robot.q_from_si(joint_array(self.robot, q))
-        out = np.zeros(q_file.shape[:-1] + (self.block_count,), dtype=np.uint16)
-        for i, joint in enumerate(self.joints):
-            at = joint.target - self.block_start
-            out[..., at:at + joint.count] = joint.words(q_file[..., i])
+        return self.encode_file(self.robot.q_from_si(joint_array(self.robot, q)))
+
+    def encode_file(self, q_file: ArrayLike) -> NDArray:
+        """As `encode`, from joint positions (..., n) in the robot file's units."""
+        q_file = np.asarray(q_file, dtype=float)
+        lead = q_file.shape[:-1]
+        out = np.zeros(lead + (self.block_count,), dtype=np.uint16)
+        for g in self._groups:       # one group (a few NumPy calls) for a uniform map
+            words = to_words(q_file[..., g.joints], g.kind, g.scales, g.word_order,
+                             g.byte_order, g.names)
+            out[..., g.columns] = words.reshape(lead + (len(g.columns),))
         return out
 
     def decode(self, block: ArrayLike) -> NDArray:
         """Waypoint blocks (..., block_count) to joint positions (..., n), SI."""
+        return self.robot.q_to_si(self.decode_file(block))
+
+    def decode_file(self, block: ArrayLike) -> NDArray:
+        """As `decode`, to joint positions (..., n) in the robot file's units."""
         block = np.asarray(block, dtype=np.uint16)
-        q_file = np.stack([j.value(block[..., j.target - self.block_start:
-                                         j.target - self.block_start + j.count])
-                           for j in self.joints], axis=-1)
-        return self.robot.q_to_si(q_file)
+        lead = block.shape[:-1]
+        q_file = np.empty(lead + (self.n,))
+        for g in self._groups:
+            words = block[..., g.columns].reshape(lead + (len(g.joints), COUNTS[g.kind]))
+            q_file[..., g.joints] = from_words(words, g.kind, g.scales, g.word_order,
+                                               g.byte_order)
+        return q_file
 
     def joint_at(self, address: int) -> str:
         """What register `address` of the block holds, for messages: ``joint q3``."""

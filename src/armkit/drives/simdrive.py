@@ -106,12 +106,10 @@ class SimDrive:
     # --- the registers ---
 
     def _initial_registers(self) -> list[int]:
+        m = self.map
         regs = [0] * (self._last - self._first + 1)
-        for joint, value in zip(self.map.joints, self._position):
-            words = joint.words(value).tolist()
-            for address in (joint.target, joint.actual):
-                if address is not None:
-                    regs[address - self._first:address - self._first + joint.count] = words
+        regs[self._slice(m.block_start, m.block_count)] = m.encode_file(self._position).tolist()
+        self._write_actual(regs)
         self._write_state(regs)
         return regs
 
@@ -142,18 +140,22 @@ class SimDrive:
         now = time.monotonic()
         dt, self._moved_at = now - self._moved_at, now
         if self._targets_written:
-            block = regs[self._slice(m.block_start, m.block_count)]
-            self._target = self.map.robot.q_from_si(self.map.decode(block))
+            self._target = m.decode_file(regs[self._slice(m.block_start, m.block_count)])
             self._targets_written = False
         if self._enabled(regs) and not self._fault_code:
             gap = self._target - self._position
             if gap.any():
                 step = self._speed * dt
                 self._position = self._position + np.clip(gap, -step, step)
-                for joint, value in zip(m.joints, self._position):
-                    if joint.actual is not None:
-                        regs[self._slice(joint.actual, joint.count)] = joint.words(value).tolist()
+                self._write_actual(regs)
         self._write_state(regs)
+
+    def _write_actual(self, regs: list[int]) -> None:
+        block = self.map.encode_file(self._position).tolist()
+        for joint in self.map.joints:
+            if joint.actual is not None:
+                at = joint.target - self.map.block_start
+                regs[self._slice(joint.actual, joint.count)] = block[at:at + joint.count]
 
     def _enabled(self, regs: list[int]) -> bool:
         return self.map.enable is None or regs[self.map.enable - self._first] != 0
