@@ -241,7 +241,7 @@ class DriveClient:
         client.may_connect = True
         if not client.connect():
             err = client.connect_error
-            why = err.strerror or str(err) if err else "failed"
+            why = (err.strerror or str(err)) if err else "failed"
             if isinstance(err, TimeoutError | socket.timeout):
                 why = f"no answer within {self.timeout:g} s"
             raise DriveError(f"cannot connect to {self.host}:{self.port}: {why}")
@@ -269,8 +269,10 @@ class DriveClient:
         except ConnectionException:
             raise _Failed("connection lost" if client.request_left else "not connected",
                           client.request_left) from None
-        except ModbusIOException:
+        except ModbusIOException as err:
             attempts = self.retries + 1
+            if "No response received" not in str(err):     # a response for another request
+                raise _Failed(f"invalid response: {err}", True) from None
             raise _Failed(f"no response within {self.timeout:g} s x {attempts} "
                           f"attempt{'s' * (attempts > 1)}", True) from None
         except (ModbusException, OSError) as err:
