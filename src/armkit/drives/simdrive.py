@@ -76,6 +76,8 @@ class SimDrive:
         (function code, address, count) of the last 100,000 requests received, in order.
     waypoint_writes : int
         Number of whole-block writes received.
+    taken : deque of list of int
+        The blocks of the last 100,000 waypoints the drive took, as written (index included).
     """
 
     def __init__(self, register_map: RegisterMap, host: str = "127.0.0.1", port: int = 0):
@@ -93,6 +95,7 @@ class SimDrive:
         self._target = home.astype(float)
         self.requests: deque[tuple[int, int, int]] = deque(maxlen=KEPT_REQUESTS)
         self.waypoint_writes = 0
+        self.taken: deque[list[int]] = deque(maxlen=KEPT_REQUESTS)
         self._armed: _Armed | None = None
         self._fault_code = 0
         self._silent = self._refusing = False
@@ -173,6 +176,7 @@ class SimDrive:
 
     def _take(self, regs: list[int], values: list[int]) -> None:
         m = self.map
+        self.taken.append(list(values))
         if m.waypoint is not None:
             regs[m.accepted - self._first] = values[m.waypoint - m.block_start]
 
