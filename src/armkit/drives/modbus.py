@@ -226,6 +226,8 @@ class DriveClient:
         self.timeout, self.retries, self.ack_timeout = timeout, int(retries), ack_timeout
         self._client = _TcpClient(host, port=self.port, timeout=timeout, retries=self.retries)
         self._index: int | None = None     # the drive's waypoint index last written or read
+        self._unread = np.full(register_map.n, np.nan)      # positions not read
+        self._unread.setflags(write=False)
 
     # --- connection ---
 
@@ -349,7 +351,7 @@ class DriveClient:
             The first failure: ``waypoint 4: no response within 1 s x 1 attempt (last accepted
             waypoint: 3; whether the drive took waypoint 4 is unknown)``.
         """
-        blocks = self.map.encode(check_waypoints(self.map, q, t)).tolist()
+        blocks = self._encode(check_waypoints(self.map, q, t))
         self._start()
         started = time.perf_counter()
         indices = []
@@ -367,10 +369,14 @@ class DriveClient:
         InputError, DriveError
             As `send`, the waypoint counted as 0.
         """
-        block = self.map.encode(check_waypoints(self.map, q)[0]).tolist()
+        block = self._encode(check_waypoints(self.map, q)[0])
         if self._index is None:
             self._start()
         return self._write(0, block)
+
+    def _encode(self, q: NDArray) -> list:
+        """Checked waypoints (..., n), SI, as register lists."""
+        return self.map.encode_file(self.map.robot.q_from_si(q)).tolist()
 
     def _start(self) -> None:
         """Before the first waypoint: connected, no fault, the drive's index, enable set."""
@@ -382,7 +388,7 @@ class DriveClient:
                 raise DriveError(err.cause, None, waypoint=0) from None
         try:
             values = self._read(m.ack_reads)
-            status = self._status(values, np.full(m.n, np.nan))
+            status = self._status(values, self._unread)
             if status.faulted:
                 raise _Failed(f"drive in fault before the first waypoint "
                               f"({self._fault_text(status)})", False)
@@ -426,7 +432,7 @@ class DriveClient:
                 # The write was answered, so the drive holds the registers; whether it took
                 # the waypoint was not seen.
                 raise _Failed(f"acknowledgement read failed: {failed.cause}", True) from None
-            status = self._status(values, np.full(m.n, np.nan))
+            status = self._status(values, self._unread)
             taken = m.accepted is None or status.accepted == index
             if status.faulted:
                 raise _Failed(f"drive fault ({self._fault_text(status)})", False,
