@@ -15,10 +15,21 @@ from armkit.kinematics import (condition_number, fk, fk_frames, jacobian, jacobi
 from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
 from armkit.model import Robot, load_robot, robot, robots, save_robot
 
+# Loaded on first use, so that `import armkit` does not pay for pymodbus (about 0.1 s).
+_DRIVES = ("load_register_map", "check_waypoints", "send_waypoints", "DriveClient", "SimDrive")
+
+
+def __getattr__(name: str):
+    if name in _DRIVES:
+        import armkit.drives
+        return getattr(armkit.drives, name)
+    raise AttributeError(f"module 'armkit' has no attribute {name!r}")
+
+
 __version__ = "0.1.0"
 
 __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot", "robot",
            "robots", "load_robot", "save_robot", "fk", "fk_frames", "jacobian",
            "jacobian_analytic", "jacobian_dot", "tool_velocity", "tool_acceleration",
            "singular_values", "manipulability", "min_singular_value", "condition_number",
-           "ik", "ik_solutions", "IKResult", "IKSolutions"]
+           "ik", "ik_solutions", "IKResult", "IKSolutions", *_DRIVES]

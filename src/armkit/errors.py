@@ -38,9 +38,27 @@ class ModelFileError(InputError):
 
 
 class DriveError(ArmkitError):
-    """Talking to a motor drive failed; says why and the last waypoint the drive accepted."""
+    """Talking to a motor drive failed; says why and the last waypoint the drive accepted.
 
-    def __init__(self, cause: str, last_accepted: int | None = None):
+    Parameters
+    ----------
+    cause : str
+        What went wrong, e.g. ``no response within 1 s (1 attempt)``.
+    last_accepted : int or None
+        Index (from 0) of the last waypoint the drive acknowledged; None if none was.
+    waypoint : int or None
+        Index of the waypoint that failed; None for a failure outside a sequence.
+    outcome_unknown : bool
+        True when the failed waypoint's write left but its outcome never came back (a lost
+        connection or a time-out): the drive may or may not have taken it.
+    """
+
+    def __init__(self, cause: str, last_accepted: int | None = None, *,
+                 waypoint: int | None = None, outcome_unknown: bool = False):
         self.cause, self.last_accepted = cause, last_accepted
+        self.waypoint, self.outcome_unknown = waypoint, outcome_unknown
         last = "none" if last_accepted is None else str(last_accepted)
-        super().__init__(f"{cause} (last accepted waypoint: {last})")
+        where = "" if waypoint is None else f"waypoint {waypoint}: "
+        unknown = (f"; whether the drive took waypoint {waypoint} is unknown"
+                   if outcome_unknown and waypoint is not None else "")
+        super().__init__(f"{where}{cause} (last accepted waypoint: {last}{unknown})")

@@ -22,7 +22,7 @@ import difflib
 import math
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 import numpy as np
 import yaml
@@ -189,12 +189,25 @@ def validation_error(path: str, err: ValidationError, model: type[BaseModel]) ->
 
 
 def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
-    """Field names allowed at `loc` of a robot file, for 'did you mean'."""
-    nested = {"units": UnitsField, "base": PoseField, "tool": PoseField, "home": PoseField,
-              "joints": model.model_fields["joints"].annotation.__args__[0]
-              if "joints" in model.model_fields else None}
-    inner = nested.get(loc[0]) if loc else model
+    """Field names allowed at `loc` of a file validated by `model`, for 'did you mean'."""
+    inner: type[BaseModel] | None = model
+    for part in loc:
+        if inner is None:
+            break
+        if not isinstance(part, int):            # list indices keep the list's item model
+            field = inner.model_fields.get(part)
+            inner = _model_in(field.annotation) if field else None
     return list(inner.model_fields) if inner else []
+
+
+def _model_in(annotation: Any) -> type[BaseModel] | None:
+    """The pydantic model inside an annotation such as ``list[Row]`` or ``Pose | None``."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in get_args(annotation):
+        if found := _model_in(arg):
+            return found
+    return None
 
 
 def parse_robot(document: Any, path: str = "<robot>") -> Robot:

@@ -1,0 +1,55 @@
+"""Fixtures for the drive tests: register maps and simulated drives on loopback ports.
+
+Every wait is bounded: client time-outs of a fraction of a second, server threads joined with
+a time-out, so a broken drive fails a test instead of hanging it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from armkit.drives import SimDrive, load_register_map, parse_register_map
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples" / "drives"
+INSPECTION = EXAMPLES / "inspection_6dof.map.yaml"
+WATER = EXAMPLES / "water_supply.map.yaml"
+TIMEOUT = 0.3   # s, the clients' response time-out in these tests
+
+
+def float32_map():
+    """The inspection map with float32 targets in degrees."""
+    doc = yaml.safe_load(INSPECTION.read_text())
+    for joint in doc["joints"]:
+        joint.update(type="float32", scale=1.0)
+    return parse_register_map(doc, "float32 map")
+
+
+MAPS = {"int32": lambda: load_register_map(INSPECTION), "float32": float32_map,
+        "water_supply": lambda: load_register_map(WATER)}
+
+
+@pytest.fixture(params=sorted(MAPS))
+def any_map(request):
+    return MAPS[request.param]()
+
+
+@pytest.fixture
+def inspection_map():
+    return load_register_map(INSPECTION)
+
+
+@pytest.fixture
+def sim(inspection_map):
+    with SimDrive(inspection_map) as drive:
+        yield drive
+
+
+def waypoints(register_map, count: int = 10, seed: int = 0) -> np.ndarray:
+    """`count` waypoints uniform within the limits, (count, n), SI."""
+    robot = register_map.robot
+    return np.random.default_rng(seed).uniform(robot.lower, robot.upper, (count, robot.n))
