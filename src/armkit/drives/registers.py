@@ -39,7 +39,7 @@ from pydantic import Field, ValidationError
 
 from armkit.errors import ArmkitError, InputError, ModelFileError
 from armkit.model import Robot, joint_array, robot as load_robot_by_name
-from armkit.model.files import _Strict, read_yaml, validation_error
+from armkit.model.files import StrictModel, read_yaml, validation_error
 
 MAX_WRITE = 123   # registers in one FC16 request (Modbus application protocol, 6.12)
 MAX_READ = 125    # registers in one FC3 request (6.3)
@@ -58,7 +58,7 @@ Address = Annotated[int, Field(ge=0, le=65535, strict=True)]
 
 # --- the file ----------------------------------------------------------------------------------
 
-class JointField(_Strict):
+class JointField(StrictModel):
     name: str | None = None
     target: Address
     actual: Address | None = None
@@ -68,19 +68,19 @@ class JointField(_Strict):
     byte_order: Order | None = None
 
 
-class CommandField(_Strict):
+class CommandField(StrictModel):
     waypoint: Address | None = None
     enable: Address | None = None
 
 
-class StatusField(_Strict):
+class StatusField(StrictModel):
     accepted: Address | None = None
     state: Address | None = None
     fault_bit: int = Field(15, ge=0, le=15, strict=True)
     fault: Address | None = None
 
 
-class RegisterMapFile(_Strict):
+class RegisterMapFile(StrictModel):
     robot: str | None = None
     device_id: int = Field(1, ge=0, le=255, strict=True)
     word_order: Order = "big"

@@ -40,21 +40,23 @@ from armkit.spatial import matrix_to_rpy, pose_from_xyz_rpy
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 
 
-class _Strict(BaseModel):
+class StrictModel(BaseModel):
+    """Base of armkit's file models: an unknown field is a mistake, not something to ignore."""
+
     model_config = ConfigDict(extra="forbid")
 
 
-class PoseField(_Strict):
+class PoseField(StrictModel):
     xyz: Vector3 = [0.0, 0.0, 0.0]
     rpy: Vector3 = [0.0, 0.0, 0.0]
 
 
-class UnitsField(_Strict):
+class UnitsField(StrictModel):
     length: Literal["mm", "m"]
     angle: Literal["deg", "rad"]
 
 
-class _JointField(_Strict):
+class _JointField(StrictModel):
     name: str | None = None
     limits: list[float] | None = None
     velocity: float | None = Field(None, gt=0)
@@ -100,7 +102,7 @@ class ScrewJointField(_JointField):
         return self
 
 
-class _RobotField(_Strict):
+class _RobotField(StrictModel):
     name: str
     description: str = ""
     units: UnitsField
