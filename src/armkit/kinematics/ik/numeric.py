@@ -241,13 +241,16 @@ def _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
 
 @_jit
 def _bounded(q, dq, lower, upper, turn, q_new):
-    """q + dq kept in the limits: a joint with a full turn of range wraps, others stop at
-    their limit. Returns the largest change."""
+    """q + dq kept in the limits: a joint with a full turn of range that leaves it comes back
+    by whole turns, others stop at their limit. Returns the largest change."""
     size = 0.0
     for j in range(q.shape[0]):
         v = q[j] + dq[j]
         if turn[j]:
-            v = lower[j] + (v - lower[j]) % (2.0 * math.pi)
+            if v < lower[j]:
+                v += 2.0 * math.pi * math.ceil((lower[j] - v) / (2.0 * math.pi))
+            elif v > upper[j]:
+                v -= 2.0 * math.pi * math.ceil((v - upper[j]) / (2.0 * math.pi))
         else:
             v = min(max(v, lower[j]), upper[j])
         q_new[j] = v
