@@ -174,6 +174,7 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
     every joint.
     """
     P, n = q0.shape
+    own = [(0.0, 0.0, 0.0)] * n
     for p in range(P):
         if phase:
             v1 = a1 = j1 = math.inf
@@ -195,18 +196,22 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
         T = 0.0
         for j in range(n):
             D = abs(qf[p, j] - q0[p, j])
+            if kind == 2:
+                own[j] = _trapezoid_shortest(D, V[p, j], A[p, j])
+            else:
+                own[j] = _double_s_shortest(D, V[p, j], A[p, j], J[p, j])
             if D > 0.0:
-                if kind == 2:
-                    tj, ta, tv = _trapezoid_shortest(D, V[p, j], A[p, j])
-                else:
-                    tj, ta, tv = _double_s_shortest(D, V[p, j], A[p, j], J[p, j])
-                T = max(T, 2.0 * ta + tv)
+                T = max(T, 2.0 * own[j][1] + own[j][2])
         for j in range(n):
             d = qf[p, j] - q0[p, j]
-            if kind == 2:
-                tj, ta, tv = _trapezoid_within(abs(d), V[p, j], A[p, j], T)
-            else:
-                tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
+            tj, ta, tv = own[j]
+            if d == 0.0 or 2.0 * ta + tv < T * (1.0 - 1e-12):
+                # Solving for T = the joint's own shortest would amplify rounding through a
+                # square root near zero, so the slowest joint keeps its own profile.
+                if kind == 2:
+                    tj, ta, tv = _trapezoid_within(abs(d), V[p, j], A[p, j], T)
+                else:
+                    tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
             _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j], values[p, j])
 
 
@@ -276,25 +281,27 @@ def _x_range(count, alpha, beta, gamma, x_top):
 
 
 @_jit
-def topp(dq, ddq, xv, amax, ds, x_end, x_start, x):
+def topp(dq, ddq, xv, amax, ds, end_top, free_start, x):
     """Backward pass (controllable sets), then the greedy forward pass; x is filled.
 
-    Returns -1 on success, else the first grid index where the path cannot be followed.
+    The end set is [0, end_top]; the start is x = 0, or with free_start the largest
+    controllable x. Returns -1 on success, else the first grid index where the path cannot be
+    followed.
     """
     N = ds.shape[0]
     rows = 4 * dq.shape[1] + 2
     alpha, beta, gamma = np.empty(rows), np.empty(rows), np.empty(rows)
     lo, hi = np.empty(N + 1), np.empty(N + 1)
-    lo[N], hi[N] = x_end, x_end
+    lo[N], hi[N] = 0.0, end_top
     for i in range(N - 1, -1, -1):
         count = _rows(i, dq, ddq, amax, ds[i], lo[i + 1], hi[i + 1], alpha, beta, gamma)
         lo[i], hi[i] = _x_range(count, alpha, beta, gamma, xv[i])
         if lo[i] > hi[i] * (1.0 + 1e-9) + 1e-12:
             return i
         hi[i] = max(hi[i], lo[i])
-    if not lo[0] - 1e-12 <= x_start <= hi[0] * (1.0 + 1e-9) + 1e-12:
+    x[0] = hi[0] if free_start else 0.0
+    if lo[0] > x[0] + 1e-12:
         return 0
-    x[0] = x_start
     for i in range(N):
         count = _rows(i, dq, ddq, amax, ds[i], lo[i + 1], hi[i + 1], alpha, beta, gamma)
         u = np.inf

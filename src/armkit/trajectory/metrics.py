@@ -10,11 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.errors import InputError
-from armkit.trajectory.piecewise import DERIVATIVES, Samples, Trajectory, _falling
-
-SAMPLES_PER_PIECE = 128
-
+from armkit.trajectory.piecewise import DERIVATIVES, Samples, Trajectory, _falling, peak
 
 @dataclass(frozen=True)
 class Stats:
@@ -29,6 +25,8 @@ class Stats:
         Largest absolute value over the motion (rad/s, rad/s^2, rad/s^3).
     squared_jerk : ndarray, shape (n,)
         ``int q'''(t)^2 dt`` over the motion, rad^2/s^5 (m^2/s^5).
+        Steps of acceleration (at the ends of a 3-3-3 spline, at a trapezoid's switches) are
+        impulses of jerk that this integral leaves out; `knot_jumps` shows them.
     """
 
     label: str
@@ -64,18 +62,6 @@ def peaks(samples: Samples) -> tuple[NDArray, NDArray, NDArray]:
     return tuple(np.max(np.abs(x), axis=axes) for x in (samples.qd, samples.qdd, samples.qddd))
 
 
-def piece_samples(tr: Trajectory, per_piece: int = SAMPLES_PER_PIECE) -> Samples:
-    """Every piece sampled at `per_piece` evenly spaced times, both of its ends included.
-
-    The end of one piece and the start of the next are both present, so a derivative's step
-    at a break is seen from both sides. Shapes (m, per_piece) and (m, per_piece, n).
-    """
-    h = np.diff(tr.breaks)
-    tau = h[:, None] * np.linspace(0.0, 1.0, per_piece)
-    return Samples(tr.breaks[:-1, None] + tau,
-                   *(tr.piece_values(tau, r) for r in range(len(DERIVATIVES))))
-
-
 def squared_jerk(tr: Trajectory) -> NDArray:
     """``int q'''(t)^2 dt`` per joint (n,), exact (rad^2/s^5 or m^2/s^5).
 
@@ -107,12 +93,11 @@ def knot_jumps(tr: Trajectory) -> Jumps:
     return Jumps(tr.breaks.copy(), after - before)
 
 
-def stats(tr: Trajectory, per_piece: int = SAMPLES_PER_PIECE) -> Stats:
-    """`Stats` of a trajectory: peaks over `per_piece` samples of every piece (ends included,
-    so steps at breaks count) and the exact integrated squared jerk."""
-    if per_piece < 2:
-        raise InputError(f"per_piece: expected at least 2 samples per piece, found {per_piece}")
-    v, a, j = peaks(piece_samples(tr, per_piece))
+def stats(tr: Trajectory) -> Stats:
+    """`Stats` of a trajectory: peaks found on every piece (`piecewise.peak`: samples, ends
+    included so steps at breaks count, then Newton steps) and the exact integrated squared jerk.
+    """
+    v, a, j = (peak(tr, r) for r in (1, 2, 3))
     return Stats(tr.label, tr.duration, v, a, j, squared_jerk(tr))
 
 

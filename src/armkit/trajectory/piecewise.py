@@ -234,6 +234,39 @@ def piece_values(c: NDArray, tau: NDArray, derivative: int = 0) -> NDArray:
     return out
 
 
+def peak(tr: Trajectory, derivative: int, per_piece: int = 16, steps: int = 4) -> NDArray:
+    """Largest |d^r q / dt^r| of every joint over the whole trajectory, (n,).
+
+    Each piece is sampled at `per_piece` times (both ends included, so steps at breaks count);
+    the best sample of each piece and joint is then polished by Newton steps on the next
+    derivative (kept between its neighbouring samples), which finds an interior extremum to
+    rounding where sampling alone would miss it by the square of the spacing.
+    """
+    c = tr.coefficients
+    h = np.diff(tr.breaks)
+    tau = h[:, None] * np.linspace(0.0, 1.0, per_piece)                 # (m, S)
+    values = np.abs(piece_values(c, tau, derivative))                   # (m, S, n)
+    best = np.argmax(values, axis=1)                                    # (m, n)
+    rows = np.arange(len(h))[:, None]
+    x = tau[rows, best]
+    lo = tau[rows, np.maximum(best - 1, 0)]
+    hi = tau[rows, np.minimum(best + 1, per_piece - 1)]
+    for _ in range(steps):
+        slope, bend = _at(c, x, derivative + 1), _at(c, x, derivative + 2)
+        step = np.divide(slope, bend, out=np.zeros_like(x), where=bend != 0)
+        x = np.clip(x - step, lo, hi)
+    polished = np.abs(_at(c, x, derivative))
+    return np.maximum(values.max(axis=(0, 1)), polished.max(axis=0))
+
+
+def _at(c: NDArray, tau: NDArray, derivative: int) -> NDArray:
+    """Derivative of polynomials c (m, K, n) at one local time per piece and joint, (m, n)."""
+    out = np.zeros(tau.shape)
+    for k in range(c.shape[1] - 1, derivative - 1, -1):
+        out = out * tau + c[:, k] * _falling(k, derivative)
+    return out
+
+
 def shift(c: NDArray, delta: ArrayLike) -> NDArray:
     """Re-expand polynomials about a point delta further on (Taylor shift).
 

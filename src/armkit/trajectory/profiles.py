@@ -195,8 +195,8 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
 
 def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike, bool]]):
     try:
-        arrays = np.broadcast_arrays(*(np.asarray(x, dtype=float)
-                                       for x in [q0, qf] + [v for _, v, _ in lims]))
+        arrays = [a.copy() for a in np.broadcast_arrays(
+            *(np.asarray(x, dtype=float) for x in [q0, qf] + [v for _, v, _ in lims]))]
     except (TypeError, ValueError):
         shapes = [np.shape(x) for x in [q0, qf] + [v for _, v, _ in lims]]
         raise InputError(f"q0, qf, limits: expected shapes that broadcast to (..., n), found "

@@ -11,11 +11,17 @@ new approach to time-optimal path parameterization based on reachability analysi
    eliminating u;
 3. a forward pass from rest takes the largest u that keeps x inside those intervals.
 
+The motion starts and ends at rest: x = 0 at the ends, except where the path's own derivative
+q'(s) is zero there (a spline with zero end velocities), where any x leaves the arm at rest and
+the largest one is taken (toppra, given ``sd_start = 0``, keeps x = 0 and is slower there, by
+an amount that shrinks only as 1 / grid).
+
 Joint acceleration ``q' u + q'' x`` is held to its limits at both ends of every grid interval
 (toppra's "interpolation" discretisation), joint velocity ``q' sqrt(x)`` at the grid points,
 with a second-order allowance for the bound's sag between them. Between those points they can still overshoot by a hair, so the
-result is checked on 8 samples per interval and, if needed, slowed uniformly by the factor that
-brings it within (of the order of 1e-5 at the default grid).
+result's peaks are found on every interval (8 samples, then Newton steps) and, if needed, the
+motion is slowed uniformly by the factor that brings them within (of the order of 1e-5 at the
+default grid).
 
 The motion is q(s(t)) with s(t) quadratic on each grid interval, so a cubic path gives an
 exact piecewise polynomial of degree 6 in time. Jerk is not limited: the acceleration of a
@@ -32,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.trajectory import _kernels
-from armkit.trajectory.piecewise import Trajectory, shift
+from armkit.trajectory.piecewise import Trajectory, peak, shift
 from armkit.trajectory.polynomial import limits
 from armkit.trajectory.spline import spline
 
@@ -126,8 +132,15 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
                        np.maximum((ends[:-1] + ends[1:]) / 2 - mid, 0.0), 0.0)
     nearest = np.minimum.reduce([ends, np.r_[np.inf, mid], np.r_[mid, np.inf]])
     xv = np.maximum(ends - np.maximum(np.r_[0.0, sag], np.r_[sag, 0.0]), nearest)
+    # Rest means q' ds/dt = 0: where the path itself stands still (q'(s) = 0, as at the ends of
+    # a spline with zero end velocities) ds/dt need not be zero, and the fastest motion leaves
+    # and arrives with ds/dt > 0 (near such an end q ~ q'' s^2 / 2, so a constant acceleration
+    # needs s ~ t). Fixing ds/dt = 0 there instead costs a time that shrinks only as 1 / grid.
+    still = np.abs(dq[[0, -1]]).max(axis=1) <= 1e-12 * max(np.abs(dq).max(), 1e-300)
+    with np.errstate(divide="ignore"):
+        end_top = min(xv[-1], np.min(A / np.abs(ddq[-1]))) if still[1] else 0.0
     x = np.empty(s.shape[0])
-    stuck = _kernels.topp(dq, ddq, xv, A, ds, 0.0, 0.0, x)
+    stuck = _kernels.topp(dq, ddq, xv, A, ds, end_top, bool(still[0]), x)
     if stuck >= 0:
         raise InputError(f"path: cannot be followed within the limits near s = {s[stuck]:.6g}")
     sd = np.sqrt(np.maximum(x, 0.0))
@@ -172,10 +185,8 @@ def _compose(path: Trajectory, s: NDArray, sd: NDArray, u: NDArray) -> NDArray:
 
 
 def _overshoot(tr: Trajectory, V: NDArray, A: NDArray) -> float:
-    """The uniform slow-down (>= 1) that brings velocity and acceleration within the limits
-    on CHECKS_PER_INTERVAL + 1 samples per piece."""
-    h = np.diff(tr.breaks)
-    tau = h[:, None] * np.linspace(0.0, 1.0, CHECKS_PER_INTERVAL + 1)
-    rv = np.max(np.abs(tr.piece_values(tau, 1)) / V)
-    ra = np.max(np.abs(tr.piece_values(tau, 2)) / A)
+    """The uniform slow-down (>= 1) that brings the peak velocity and acceleration of every
+    piece (`armkit.trajectory.piecewise.peak`) within the limits."""
+    rv = np.max(peak(tr, 1, CHECKS_PER_INTERVAL) / V)
+    ra = np.max(peak(tr, 2, CHECKS_PER_INTERVAL) / A)
     return float(max(1.0, rv, np.sqrt(ra)))
