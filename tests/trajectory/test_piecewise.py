@@ -30,10 +30,18 @@ def numpy_reference(tr: Trajectory, t: np.ndarray, r: int) -> np.ndarray:
     return out
 
 
-@pytest.mark.parametrize("count", [7, 3 * _kernels.PARALLEL_FROM + 5])   # serial and parallel
-def test_sample_matches_numpy_polynomials(count):
+@pytest.mark.parametrize("count, order", [
+    (7, "random"), (3 * _kernels.PARALLEL_FROM + 5, "random"),       # serial, parallel
+    (3 * _kernels.PARALLEL_FROM + 5, "sorted"),                       # runs within a piece
+    (50, "breaks"),                                                   # exactly on the breaks
+])
+def test_sample_matches_numpy_polynomials(count, order):
     tr = random_trajectory()
     t = np.random.default_rng(1).uniform(tr.start, tr.end, count)
+    if order == "sorted":
+        t = np.sort(t)
+    elif order == "breaks":
+        t = np.sort(np.r_[t, np.repeat(tr.breaks, 10)])
     s = tr.sample(t)
     for r, values in enumerate((s.q, s.qd, s.qdd, s.qddd)):
         np.testing.assert_allclose(values, numpy_reference(tr, t, r), rtol=1e-12, atol=1e-10)

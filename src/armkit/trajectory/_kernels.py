@@ -16,7 +16,9 @@ _jit = numba.njit(cache=True, nogil=True)
 _pjit = numba.njit(cache=True, nogil=True, parallel=True)
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
-_CHUNK = 2048
+_CHUNK = 16384              # samples per parallel task
+_BLOCK = 256                # samples of one piece evaluated together
+_RUN = 8                    # shorter runs of samples in one piece go one by one
 
 
 @_jit
@@ -40,19 +42,46 @@ def _span(breaks, table, t, out, start, stop):
     """Samples start..stop-1: out[r, s, j] = derivative r of joint j at t[s].
 
     table[i, r, k, j] holds coefficient k of derivative r on piece i (falling factorials
-    applied, powers above K - 1 - r zero), so each derivative is one Horner pass.
+    applied, powers above K - 1 - r zero), so each derivative is one Horner pass. Sorted times
+    come in runs that share a piece; a run is evaluated with the samples in the innermost
+    loop, which the compiler vectorises (a Horner chain per sample and joint would wait on
+    itself). Times in no order fall back to one sample at a time.
     """
     nder, K, n = table.shape[1], table.shape[2], table.shape[3]
-    i = 0
-    for s in range(start, stop):
+    last = breaks.shape[0] - 2
+    tau, acc = np.empty(_BLOCK), np.empty(_BLOCK)
+    i, s = 0, start
+    while s < stop:
         i = _piece(breaks, t[s], i)
-        tau = t[s] - breaks[i]
+        top = breaks[i + 1] if i < last else np.inf
+        e, limit = s + 1, min(stop, s + _BLOCK)
+        while e < limit and breaks[i] <= t[e] < top:
+            e += 1
+        if e - s < _RUN:
+            x = t[s] - breaks[i]
+            for r in range(nder):
+                for j in range(n):
+                    v = table[i, r, K - 1 - r, j]
+                    for k in range(K - 2 - r, -1, -1):
+                        v = v * x + table[i, r, k, j]
+                    out[r, s, j] = v
+            s += 1
+            continue
+        count = e - s
+        for q in range(count):
+            tau[q] = t[s + q] - breaks[i]
         for r in range(nder):
             for j in range(n):
-                acc = table[i, r, K - 1 - r, j]
+                c = table[i, r, K - 1 - r, j]
+                for q in range(count):
+                    acc[q] = c
                 for k in range(K - 2 - r, -1, -1):
-                    acc = acc * tau + table[i, r, k, j]
-                out[r, s, j] = acc
+                    c = table[i, r, k, j]
+                    for q in range(count):
+                        acc[q] = acc[q] * tau[q] + c
+                for q in range(count):
+                    out[r, s + q, j] = acc[q]
+        s = e
 
 
 @_jit

@@ -41,9 +41,8 @@ from collections.abc import Mapping, Sequence
 from math import factorial
 
 import numpy as np
-import scipy.sparse as sp
 from numpy.typing import ArrayLike, NDArray
-from scipy.sparse.linalg import splu
+from scipy.linalg import LinAlgError, solve_banded
 
 from armkit.errors import InputError
 from armkit.trajectory.piecewise import Trajectory, _falling
@@ -105,19 +104,11 @@ def spline(times: ArrayLike, points: ArrayLike, degrees: int | str | Sequence[in
     zero_autos = unknowns - fixed >= len(auto)
     for key in auto:
         given[key] = np.zeros(n) if zero_autos else None
-    system = _System(t, deg)
-    for i in range(m):
-        system.add(i, 0, 0, q[i])
-        system.add(i, 1, 0, q[i + 1])
-    for i in range(1, m):
-        for r in range(1, continuity + 1):
-            system.add_continuity(i, r)
-    for (side, r), value in given.items():
-        if value is not None:
-            system.add(0 if side == 0 else m - 1, side, r, value)
     label = "-".join(str(d) for d in deg)
-    c = system.solve(label, n, continuity, given)
-    return Trajectory(t, system.to_time(c), knots=t, label=label)
+    system = _System(t, deg, continuity)
+    A, b, keys = system.conditions(q, given)
+    return Trajectory(t, system.to_time(system.solve(A, b, keys, label, given)), knots=t,
+                      label=label)
 
 
 def patterns(times: ArrayLike, points: ArrayLike,
@@ -199,100 +190,152 @@ def _boundary(name: str, value: Boundary, n: int) -> NDArray | str | None:
 
 
 class _System:
-    """Rows of the linear conditions on the coefficients of all segments.
+    """The linear conditions on the coefficients of all segments, built segment-vectorised.
 
     Segment i is written in its own normalised time ``u = (t - t_i) / h_i`` in [0, 1], with
-    coefficients ``a[off_i + k]`` of ``u**k``; so a row for derivative r at an end of the
-    segment is ``d^r/du^r`` divided by ``h_i**r``. Rows are scaled to order one.
+    coefficients ``a[off_i + k]`` of ``u**k``; a condition on derivative r at an end of the
+    segment is ``d^r/du^r`` divided by ``h_i**r``. Rows are scaled to order one: a boundary row
+    by ``h**r``, a continuity row by the shorter neighbour's ``h**r``.
     """
 
-    def __init__(self, t: NDArray, deg: NDArray):
-        self.h, self.deg = np.diff(t), deg
+    def __init__(self, t: NDArray, deg: NDArray, continuity: int):
+        self.h, self.deg, self.continuity = np.diff(t), deg, continuity
         self.off = np.r_[0, np.cumsum(deg + 1)]
-        self.rows, self.cols, self.vals, self.rhs = [], [], [], []
+        self.K = int(deg.max()) + 1
+        top = max(self.K, continuity + 1)
+        self.fall = np.array([[_falling(k, r) for k in range(top)] for r in range(top)])
 
-    def _entries(self, i: int, side: int, r: int) -> tuple[list[int], list[float]]:
-        """Columns and weights of ``h_i**r * d^r q / dt^r`` at u = side of segment i."""
-        d = self.deg[i]
-        if side == 0:
-            return ([self.off[i] + r], [float(factorial(r))]) if r <= d else ([], [])
-        ks = range(r, d + 1)
-        return [self.off[i] + k for k in ks], [_falling(k, r) for k in ks]
+    def _ends(self, seg: NDArray, side: int, r: int, weight: NDArray):
+        """One row per segment in seg: ``weight * h**r * d^r q/dt^r`` at u = side.
 
-    def _row(self, cols, vals, rhs) -> None:
-        row = len(self.rhs)
-        self.rows += [row] * len(cols)
-        self.cols += cols
-        self.vals += vals
-        self.rhs.append(rhs)
+        Returns (row within the block, column, value) triplets.
+        """
+        k = np.arange(self.K)
+        use = (k[None, :] <= self.deg[seg, None]) & ((k >= r) if side else (k == r))[None, :]
+        rows, ks = np.nonzero(use)
+        return rows, self.off[seg][rows] + ks, (self.fall[r, ks] * weight[rows])
 
-    def add(self, i: int, side: int, r: int, value: NDArray) -> None:
-        """Derivative r of segment i at its start (side 0) or end (side 1) equals value."""
-        cols, vals = self._entries(i, side, r)
-        self._row(cols, vals, np.asarray(value, dtype=float) * self.h[i] ** r)
+    def conditions(self, q: NDArray, given: Mapping) -> tuple[tuple, NDArray, NDArray]:
+        """The conditions A a = b: through the points, continuity, the given end values.
 
-    def add_continuity(self, i: int, r: int) -> None:
-        """Derivative r continuous at knot i (end of segment i - 1 = start of segment i)."""
-        scale = min(self.h[i - 1], self.h[i]) ** r
-        left_c, left_v = self._entries(i - 1, 1, r)
-        right_c, right_v = self._entries(i, 0, r)
-        self._row(left_c + right_c,
-                  [v * scale / self.h[i - 1] ** r for v in left_v]
-                  + [-v * scale / self.h[i] ** r for v in right_v], 0.0)
+        Returns
+        -------
+        (rows, cols, vals) : the nonzero entries of A (R, U)
+        b : ndarray, shape (R, n)
+        keys : ndarray, shape (R,)
+            Where each row sits in the segment order `solve` bands the system by: 3 i for
+            continuity at knot i, 3 i + 1.5 for a row on segment i alone (its coefficients sit
+            at 3 i + 1).
+        """
+        m, n = self.h.shape[0], q.shape[1]
+        seg, inner = np.arange(m), np.arange(1, m)
+        ones = np.ones(m)
+        blocks = [(self._ends(seg, 0, 0, ones), q[:-1], 3.0 * seg + 1.5),
+                  (self._ends(seg, 1, 0, ones), q[1:], 3.0 * seg + 1.5)]
+        for r in range(1, self.continuity + 1):
+            scale = np.minimum(self.h[:-1], self.h[1:]) ** r
+            left = self._ends(inner - 1, 1, r, scale / self.h[:-1] ** r)
+            right = self._ends(inner, 0, r, -scale / self.h[1:] ** r)
+            merged = tuple(np.concatenate(pair) for pair in zip(left, right))
+            blocks.append((merged, np.zeros((m - 1, n)), 3.0 * inner))
+        for (side, r), value in given.items():
+            if value is not None:
+                i = np.array([0 if side == 0 else m - 1])
+                blocks.append((self._ends(i, side, r, np.ones(1)),
+                               (value * self.h[i] ** r)[None, :], 3.0 * i + 1.5))
+        rows, cols, vals, rhs, keys, start = [], [], [], [], [], 0
+        for (r, c, v), b, key in blocks:
+            rows.append(r + start)
+            cols.append(c)
+            vals.append(v)
+            rhs.append(b)
+            keys.append(key)
+            start += b.shape[0]
+        entries = tuple(np.concatenate(x) for x in (rows, cols, vals))
+        return entries, np.concatenate(rhs), np.concatenate(keys)
 
-    def _jerk_weights(self) -> sp.csc_matrix:
-        """H with ``a^T H a = int sum q'''(t)^2 dt`` over all segments (block diagonal).
+    def jerk_weights(self) -> tuple[NDArray, NDArray, NDArray]:
+        """Entries (rows, cols, vals) of H with ``a^T H a = int sum q'''(t)^2 dt`` (block
+        diagonal, scaled to a largest entry of one; the scale does not move the minimum).
 
         On segment i, ``int_0^h_i (q''')^2 dt = h_i**-5 int_0^1 (d^3 q/du^3)^2 du`` and
         ``int_0^1 u^(k-3) u^(l-3) du = 1 / (k + l - 5)``.
         """
-        rows, cols, vals = [], [], []
-        for i, d in enumerate(self.deg):
-            for k in range(3, d + 1):
-                for l in range(3, d + 1):
-                    rows.append(self.off[i] + k)
-                    cols.append(self.off[i] + l)
-                    vals.append(_falling(k, 3) * _falling(l, 3) / (k + l - 5) / self.h[i] ** 5)
-        U = int(self.off[-1])
-        H = sp.csc_matrix((vals, (rows, cols)), shape=(U, U))
-        return H / max(1.0, abs(H).max()) if vals else H
+        k = np.arange(self.K)
+        f3 = np.array([_falling(j, 3) for j in k])
+        use = (k[None, :, None] >= 3) & (k[None, None, :] >= 3) & \
+            (k[None, :, None] <= self.deg[:, None, None]) & \
+            (k[None, None, :] <= self.deg[:, None, None])
+        i, a, b = np.nonzero(use)
+        vals = f3[a] * f3[b] / (a + b - 5) / self.h[i] ** 5
+        return self.off[i] + a, self.off[i] + b, vals / max(1.0, vals.max(initial=0.0))
 
-    def solve(self, label: str, n: int, continuity: int, given: Mapping) -> NDArray:
-        """Coefficients (U, n): the conditions, and least squared jerk for what they leave."""
-        U, R = int(self.off[-1]), len(self.rhs)
-        b = np.array([np.broadcast_to(v, (n,)) for v in self.rhs])
-        A = sp.csc_matrix((self.vals, (self.rows, self.cols)), shape=(R, U))
+    def solve(self, A: tuple, b: NDArray, keys: NDArray, label: str,
+              given: Mapping) -> NDArray:
+        """Coefficients (U, n): the conditions, and least squared jerk for what they leave.
+
+        With free coefficients, the KKT system ``[H A^T; A 0] [a; l] = [0; b]``; with none,
+        ``A a = b`` (H plays no part, and its multipliers would only swamp the residual where
+        short segments meet long ones). Unknowns and conditions ordered segment by segment make
+        either banded (a condition touches one segment, or two at a knot), so a banded LU with
+        partial pivoting solves it in time linear in the number of segments.
+        """
+        rows, cols, vals = A
+        U, R, n = int(self.off[-1]), b.shape[0], b.shape[1]
         if R > U:
-            ends = [name for (side, r), name in zip(given, ("start velocity", "end velocity",
-                                                            "start acceleration",
-                                                            "end acceleration"))
-                    if given[(side, r)] is not None]
+            names = ("start velocity", "end velocity", "start acceleration", "end acceleration")
+            ends = [name for key, name in zip(given, names) if given[key] is not None]
             raise InputError(
                 f"degrees: pattern {label} has {U} coefficients per joint but {R} conditions "
-                f"(through {len(self.h) + 1} points, derivatives 1..{continuity} continuous at "
-                f"{len(self.h) - 1} knots, {', '.join(ends) or 'no end values'}); "
+                f"(through {len(self.h) + 1} points, derivatives 1..{self.continuity} continuous "
+                f"at {len(self.h) - 1} knots, {', '.join(ends) or 'no end values'}); "
                 "raise a degree or leave an end value free")
-        if R == U:
-            K, rhs = A, b
+        segment = np.repeat(np.arange(len(self.deg)), self.deg + 1)
+        power = np.arange(U) - self.off[segment]
+        unknown_keys = 3.0 * segment + 1 + power / (2 * self.K)
+        if R == U:                        # nothing left to choose: A a = b, banded the same way
+            row_at, back = _place(keys), _place(unknown_keys)
+            i, j, v = row_at[rows], back[cols], vals
+            rhs, size = np.zeros((U, n)), U
+            rhs[row_at] = b
         else:
-            K = sp.bmat([[self._jerk_weights(), A.T], [A, None]], format="csc")
-            rhs = np.vstack([np.zeros((U, n)), b])
+            at = _place(np.r_[unknown_keys, keys])
+            hr, hc, hv = self.jerk_weights()
+            i, j = at[np.r_[hr, U + rows, cols]], at[np.r_[hc, cols, U + rows]]
+            v = np.r_[hv, vals, vals]
+            rhs, size = np.zeros((U + R, n)), U + R
+            rhs[at[U:]] = b
+            back = at[:U]
+        lower, upper = int(max(0, (i - j).max())), int(max(0, (j - i).max()))
+        banded = np.zeros((lower + upper + 1, size))
+        np.add.at(banded, (upper + i - j, j), v)
         try:
-            x = splu(K).solve(rhs)
-        except RuntimeError:
+            x = solve_banded((lower, upper), banded, rhs, check_finite=False)[back]
+        except LinAlgError:
             x = None
-        if x is None or not np.isfinite(x).all() or \
-                np.abs(A @ x[:U] - b).max() > 1e-9 * (1.0 + np.abs(b).max()):
+        if x is not None:
+            residual = np.zeros((R, n))
+            np.add.at(residual, rows, vals[:, None] * x[cols])
+        # Backward error: a pattern can be badly conditioned (zero acceleration imposed at the
+        # start of a chain of cubics grows like an unstable recurrence), so the residual is
+        # weighed against |A| |x| as well as |b|.
+        if x is None or not np.isfinite(x).all() or np.abs(residual - b).max() > \
+                1e-9 * (1.0 + np.abs(b).max() + np.abs(vals).max() * np.abs(x).max()):
             raise InputError(f"degrees: pattern {label} cannot meet its conditions (they "
                              "contradict or leave the motion undetermined); change a degree "
                              "or an end value")
-        return x[:U]
+        return x
 
     def to_time(self, a: NDArray) -> NDArray:
         """Coefficients in powers of (t - t_i), zero padded: shape (m, max degree + 1, n)."""
-        m, K = self.deg.shape[0], int(self.deg.max()) + 1
-        out = np.zeros((m, K, a.shape[1]))
-        for i, d in enumerate(self.deg):
-            out[i, :d + 1] = a[self.off[i]:self.off[i] + d + 1] / self.h[i] ** \
-                np.arange(d + 1)[:, None]
-        return out
+        k = np.arange(self.K)
+        use = k[None, :] <= self.deg[:, None]
+        index = np.where(use, self.off[:-1, None] + k[None, :], 0)
+        return np.where(use[..., None], a[index], 0.0) / self.h[:, None, None] ** k[:, None]
+
+
+def _place(keys: NDArray) -> NDArray:
+    """Position of each item when the items are sorted by key (stable)."""
+    at = np.empty(keys.shape[0], dtype=int)
+    at[np.argsort(keys, kind="stable")] = np.arange(keys.shape[0])
+    return at
