@@ -203,6 +203,16 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
     every joint.
     """
     P, n = q0.shape
+    for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
+        for j in range(n):
+            if not (math.isfinite(q0[p, j]) and math.isfinite(qf[p, j])):
+                return 1
+            if not V[p, j] > 0.0:
+                return 2
+            if not (A[p, j] > 0.0 and (kind == 3 or A[p, j] < math.inf)):
+                return 3
+            if not (0.0 < J[p, j] < math.inf):
+                return 4
     own = [(0.0, 0.0, 0.0)] * n
     for p in range(P):
         if phase:
@@ -242,16 +252,17 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
                 else:
                     tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
             _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j], values[p, j])
+    return 0
 
 
 def profile_phases(kind: int, q0: np.ndarray, qf: np.ndarray, V: np.ndarray, A: np.ndarray,
-                   J: np.ndarray, phase: bool) -> tuple[np.ndarray, np.ndarray]:
-    """Phase times (P, n, K + 1) and top derivatives (P, n, K) for q0 ... J of shape (P, n)."""
+                   J: np.ndarray, phase: bool) -> tuple[np.ndarray, np.ndarray, int]:
+    """Phase times (P, n, K + 1) and top derivatives (P, n, K) for q0 ... J of shape (P, n),
+    and 0, or the first bad input: 1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit."""
     P, n = q0.shape
     K = 3 if kind == 2 else 7
     times, values = np.empty((P, n, K + 1)), np.empty((P, n, K))
-    _timing(kind, q0, qf, V, A, J, phase, times, values)
-    return times, values
+    return times, values, _timing(kind, q0, qf, V, A, J, phase, times, values)
 
 
 # --- TOPP-RA (retime.py) -----------------------------------------------------------------------

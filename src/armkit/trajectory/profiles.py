@@ -88,8 +88,8 @@ def trapezoidal_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Arr
     Profile
         ``order`` 2: phases accelerate, cruise, decelerate.
     """
-    q0, qf, (V, A) = _problem(q0, qf, [("vmax", vmax, True), ("amax", amax, False)])
-    return _profile(2, q0, qf, V, A, np.ones_like(V), sync)
+    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax)])
+    return _profile(2, arrays, ("vmax", "amax"), sync)
 
 
 def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -116,9 +116,8 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     >>> p.duration.shape
     (1000,)
     """
-    q0, qf, (V, A, J) = _problem(q0, qf, [("vmax", vmax, True), ("amax", amax, True),
-                                          ("jmax", jmax, False)])
-    return _profile(3, q0, qf, V, A, J, sync)
+    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax), ("jmax", jmax)])
+    return _profile(3, arrays, ("vmax", "amax", "jmax"), sync)
 
 
 def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
@@ -193,25 +192,20 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     return Trajectory(breaks, c, label=label)
 
 
-def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike, bool]]):
+def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike]]):
+    """q0, qf and the limits as float arrays of one shape (..., n); the kernel checks values."""
+    raw = [q0, qf] + [v for _, v in lims]
     try:
-        arrays = [a.copy() for a in np.broadcast_arrays(
-            *(np.asarray(x, dtype=float) for x in [q0, qf] + [v for _, v, _ in lims]))]
+        arrays = [np.asarray(x, dtype=float) for x in raw]
+        shapes = {a.shape for a in arrays}
+        shape = shapes.pop() if len(shapes) == 1 else np.broadcast_shapes(*shapes)
     except (TypeError, ValueError):
-        shapes = [np.shape(x) for x in [q0, qf] + [v for _, v, _ in lims]]
-        raise InputError(f"q0, qf, limits: expected shapes that broadcast to (..., n), found "
-                         f"{shapes}") from None
-    q0, qf = arrays[:2]
-    if q0.ndim == 0:
+        raise InputError(f"q0, qf, limits: expected numbers of shapes that broadcast to "
+                         f"(..., n), found {[np.shape(x) for x in raw]}") from None
+    if not shape:
         raise InputError("q0, qf: expected shape (..., n), found scalars")
-    if not (np.isfinite(q0).all() and np.isfinite(qf).all()):
-        raise InputError("q0, qf: expected finite joint values, found NaN or inf")
-    for (name, value, may_be_inf), v in zip(lims, arrays[2:]):
-        if not (v > 0).all() or not (may_be_inf or np.isfinite(v).all()):
-            finite = "" if may_be_inf else " finite"
-            raise InputError(f"{name}: expected positive{finite} limits, found "
-                             f"{np.unique(v).tolist()}")
-    return arrays[0], arrays[1], arrays[2:]
+    return [a if a.shape == shape else np.full(shape, a) if a.ndim == 0 else
+            np.broadcast_to(a, shape) for a in arrays]
 
 
 def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -222,13 +216,22 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
     return a, b
 
 
-def _profile(order: int, q0: NDArray, qf: NDArray, V: NDArray, A: NDArray, J: NDArray,
-             sync: str) -> Profile:
+def _profile(order: int, arrays: list[NDArray], names: tuple[str, ...], sync: str) -> Profile:
+    """Run the kernel on q0, qf, vmax, amax(, jmax) of shape (..., n)."""
     if sync not in ("time", "phase"):
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
-    shape, n = q0.shape, q0.shape[-1]
-    flat = (np.ascontiguousarray(x).reshape(-1, n) for x in (q0, qf, V, A, J))
-    times, values = _kernels.profile_phases(order, *flat, sync == "phase")
+    shape, n = arrays[0].shape, arrays[0].shape[-1]
+    if order == 2:
+        arrays = arrays + [np.ones(shape)]          # the kernel's unused jerk limit
+    times, values, bad = _kernels.profile_phases(
+        order, *(np.ascontiguousarray(x).reshape(-1, n) for x in arrays), sync == "phase")
+    if bad == 1:
+        raise InputError("q0, qf: expected finite joint values, found NaN or inf")
+    if bad:
+        name = names[bad - 2]
+        finite = "" if name == "vmax" or (name == "amax" and order == 3) else " finite"
+        raise InputError(f"{name}: expected positive{finite} limits, found "
+                         f"{np.unique(arrays[bad]).tolist()}")
     times = times.reshape(shape + times.shape[-1:])
-    return Profile(np.max(times[..., -1], axis=-1), times,
-                   values.reshape(shape + values.shape[-1:]), order, q0, qf)
+    return Profile(times[..., 0, -1].copy(), times, values.reshape(shape + values.shape[-1:]),
+                   order, arrays[0], arrays[1])
