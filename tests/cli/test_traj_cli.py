@@ -109,3 +109,20 @@ def test_the_real_command_end_to_end(tmp_path):
                           timeout=300)
     assert done.returncode == 0, done.stderr
     assert len(json.loads(done.stdout)["figures"]) == 2
+
+
+def test_point_to_point_case_file_with_scalar_limits(tmp_path):
+    path = tmp_path / "p2p.yaml"
+    path.write_text("robot: inspection_6dof\nstart: [0, 0, 0, 0, 0, 0]\n"
+                    "goal: [30, -45, 60, 0, 90, 0]\nprofiles: [trapezoidal, jerk-limited]\n"
+                    "velocity: 45\nacceleration: [90, 90, 90, 90, 120, 120]\njerk: 600\n"
+                    "sync: phase\n")
+    result = run("traj", str(path), "--out", str(tmp_path), "--json")
+    assert result.exit_code == 0, result.output
+    trapezoid, jerk = json.loads(result.stdout)["trajectories"]
+    for tr in (trapezoid, jerk):
+        assert max(j["peak_velocity"] for j in tr["joints"]) <= 45 * (1 + 1e-9)
+    # Phase sync: every joint's peak velocity in proportion to its distance.
+    v = np.array([j["peak_velocity"] for j in jerk["joints"]])
+    np.testing.assert_allclose(v / v[0], np.array([30, 45, 60, 90]) / 30, rtol=1e-9)
+    assert (tmp_path / "p2p_joints.png").exists()

@@ -42,7 +42,7 @@ from armkit.model.files import read_yaml, validation_error
 from armkit.report.trajectory import patterns_figure, tool_figure
 
 Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
-Limit = list[float] | None
+Limit = float | list[float] | None
 
 
 class CaseFile(BaseModel):

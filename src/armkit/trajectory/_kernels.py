@@ -1,8 +1,9 @@
-"""numba kernels of the trajectory package: piecewise-polynomial evaluation and TOPP-RA passes.
+"""numba kernels of the trajectory package: piecewise-polynomial evaluation, rest-to-rest
+profile timing, and the TOPP-RA passes.
 
 Evaluation comes twice, serial for small batches (no thread start-up) and parallel over chunks
-of samples, as in `armkit.kinematics._kernels`. benchmarks/trajectory.py measures it against a
-vectorised NumPy evaluation.
+of samples, as in `armkit.kinematics._kernels`. benchmarks/trajectory.py measures each against
+scipy, ruckig, toppra or a vectorised NumPy version of the same work.
 """
 
 from __future__ import annotations

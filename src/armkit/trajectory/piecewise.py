@@ -14,15 +14,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
+from armkit.model.chain import _frozen
 from armkit.trajectory import _kernels
 
 DERIVATIVES = ("position", "velocity", "acceleration", "jerk")
-
-
-def _frozen(a: ArrayLike) -> NDArray:
-    a = np.array(a, dtype=float)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True)
@@ -83,7 +78,8 @@ class Trajectory:
             raise InputError(f"coefficients: expected shape ({breaks.shape[0] - 1}, K, n), "
                              f"found {coefficients.shape}")
         if not (np.isfinite(breaks).all() and np.isfinite(coefficients).all()):
-            raise InputError("trajectory: expected finite breaks and coefficients, found NaN or inf")
+            raise InputError("trajectory: expected finite breaks and coefficients, found NaN or "
+                             "inf")
         if not (np.diff(breaks) > 0).all():
             raise InputError("breaks: expected strictly increasing times, found "
                              f"{np.array2string(breaks, threshold=8)}")
@@ -208,7 +204,7 @@ class Trajectory:
 
 
 def _derivative_table(c: NDArray, count: int) -> NDArray:
-    """table[i, r, k, j]: coefficient k of the r-th derivative (zero padded), shape (m, count, K, n)."""
+    """table[i, r, k, j]: coefficient k of the r-th derivative (zero padded), (m, count, K, n)."""
     m, K, n = c.shape
     table = np.zeros((m, count, K, n))
     for r in range(count):

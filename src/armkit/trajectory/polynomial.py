@@ -53,12 +53,9 @@ def cubic(q0: ArrayLike, qf: ArrayLike, duration: float | None = None, *,
     Trajectory
         One piece from t = 0; accelerations step at the ends (6 D/T^2 between rest states).
     """
-    q0, qf = _ends(q0, qf)
-    T = _duration("cubic", q0, qf, duration, (vmax, amax, jmax),
-                  np.any(start_velocity) or np.any(end_velocity))
-    tr = spline([0.0, T], [q0, qf], 3, start_velocity=start_velocity, end_velocity=end_velocity,
-                start_acceleration=None, end_acceleration=None)
-    return Trajectory(tr.breaks, tr.coefficients, label="cubic")
+    return _one_piece("cubic", q0, qf, duration, (vmax, amax, jmax),
+                      {"start_velocity": start_velocity, "end_velocity": end_velocity,
+                       "start_acceleration": None, "end_acceleration": None})
 
 
 def quintic(q0: ArrayLike, qf: ArrayLike, duration: float | None = None, *,
@@ -90,13 +87,20 @@ def quintic(q0: ArrayLike, qf: ArrayLike, duration: float | None = None, *,
     >>> tr = quintic(np.zeros(6), np.deg2rad([30, -45, 60, 0, 90, 0]), 10.0)
     >>> tr.evaluate(5.0)                       # halfway: half of each move
     """
+    return _one_piece("quintic", q0, qf, duration, (vmax, amax, jmax),
+                      {"start_velocity": start_velocity, "end_velocity": end_velocity,
+                       "start_acceleration": start_acceleration,
+                       "end_acceleration": end_acceleration})
+
+
+def _one_piece(law: str, q0: ArrayLike, qf: ArrayLike, duration: float | None, lims: tuple,
+               ends: dict) -> Trajectory:
+    """The one-segment spline of degree 3 or 5 from q0 to qf with the given end conditions."""
     q0, qf = _ends(q0, qf)
-    moving = any(np.any(v) for v in (start_velocity, end_velocity, start_acceleration,
-                                     end_acceleration))
-    T = _duration("quintic", q0, qf, duration, (vmax, amax, jmax), moving)
-    tr = spline([0.0, T], [q0, qf], 5, start_velocity=start_velocity, end_velocity=end_velocity,
-                start_acceleration=start_acceleration, end_acceleration=end_acceleration)
-    return Trajectory(tr.breaks, tr.coefficients, label="quintic")
+    moving = any(np.any(v) for v in ends.values() if v is not None)
+    T = _duration(law, q0, qf, duration, lims, moving)
+    tr = spline([0.0, T], [q0, qf], 3 if law == "cubic" else 5, **ends)
+    return Trajectory(tr.breaks, tr.coefficients, label=law)
 
 
 def _ends(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:

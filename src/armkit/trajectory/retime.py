@@ -18,10 +18,10 @@ an amount that shrinks only as 1 / grid).
 
 Joint acceleration ``q' u + q'' x`` is held to its limits at both ends of every grid interval
 (toppra's "interpolation" discretisation), joint velocity ``q' sqrt(x)`` at the grid points,
-with a second-order allowance for the bound's sag between them. Between those points they can still overshoot by a hair, so the
-result's peaks are found on every interval (8 samples, then Newton steps) and, if needed, the
-motion is slowed uniformly by the factor that brings them within (of the order of 1e-5 at the
-default grid).
+with a second-order allowance for the bound's sag between them. Between those points they can
+still overshoot by a hair, so the result's peaks are found on every interval (8 samples, then
+Newton steps) and, if needed, the motion is slowed uniformly by the factor that brings them
+within (of the order of 1e-5 at the default grid).
 
 The motion is q(s(t)) with s(t) quadratic on each grid interval, so a cubic path gives an
 exact piecewise polynomial of degree 6 in time. Jerk is not limited: the acceleration of a

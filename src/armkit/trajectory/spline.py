@@ -15,7 +15,8 @@ Conditions, per joint (the same matrix for all joints; only the right-hand sides
 
 A segment of degree d has d + 1 coefficients. Whatever freedom remains after these conditions is
 fixed by one rule: **least integrated squared jerk**, ``min sum_j int q_j'''(t)^2 dt`` (the
-equality-constrained least squares is solved through its KKT system). Counted for m = 3:
+equality-constrained least squares is solved through its KKT system, banded, one LU for all
+joints). Counted for m = 3:
 
 =======  ============  ======================================================  =========
 pattern  coefficients  conditions                                              left free
@@ -33,12 +34,16 @@ jerk and snap vanish, so the result is C4 (a quintic spline). For 4-5-5 the quar
 segment leaves only one of those two conditions at the first via point: jerk and snap are
 continuous at the second via point, and at the first one weighted combination of their jumps is
 zero (``6 [q'''] = h_1 [q'''']``, h_1 the quartic's duration; see the tests).
+
+The "auto" rule counts freedom over the whole pattern, not where it sits: in a long chain of
+cubics ending in one quintic, zero acceleration at the start turns the cubics into an initial
+value problem whose solution grows from knot to knot. Such a pattern is solved as asked, but it
+is better given free end accelerations or higher degrees at the ends.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from math import factorial
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
