@@ -25,18 +25,27 @@ def distance_from_line(points, a, b):
 
 @given(dx=st.floats(-0.15, 0.15), dy=st.floats(-0.15, 0.15), dz=st.floats(-0.15, 0.15),
        turn=st.floats(-0.5, 0.5))
-def test_the_tool_stays_on_the_line(dx, dy, dz, turn):
+def test_the_tool_stays_on_the_line_as_far_as_it_follows_it(dx, dy, dz, turn):
     T0 = armkit.fk(UR5, Q0)
     T1 = transform(T0[:3, :3] @ rotz(turn), T0[:3, 3] + [dx, dy, dz])
     path = cartesian_line(UR5, T0, T1, Q0)
-    assert path.success and path.reason == "ok" and path.stop == 1.0
+    assert path.success or path.reason in ("out of reach", "joint limits", "singularity")
+    assert path.success == (path.stop == 1.0) == (len(path.q) == len(path.s))
     reached = armkit.fk(UR5, path.q)
-    np.testing.assert_allclose(reached, path.poses, atol=1e-9)
+    np.testing.assert_allclose(reached, path.poses[:len(path.q)], atol=1e-9)
     if np.linalg.norm([dx, dy, dz]) > 1e-6:
         assert distance_from_line(reached[:, :3, 3], T0[:3, 3], T1[:3, 3]).max() < 1e-9
-    # No jumps: a sample moves the joints by little more than its share of the whole motion.
-    steps = np.abs(np.diff(path.q, axis=0)).max()
-    assert steps < 0.05
+    # No jumps: every joint step stays under the singularity threshold.
+    assert np.abs(np.diff(path.q, axis=0)).max(initial=0.0) <= 0.35
+
+
+def test_a_short_line_is_followed_whole():
+    T0 = armkit.fk(UR5, Q0)
+    T1 = transform(T0[:3, :3] @ rotz(0.2), T0[:3, 3] + [0.1, -0.05, 0.08])
+    path = cartesian_line(UR5, T0, T1, Q0)
+    assert path.success and path.reason == "ok"
+    assert distance_from_line(armkit.fk(UR5, path.q)[:, :3, 3], T0[:3, 3], T1[:3, 3]).max() < 1e-9
+    assert np.abs(np.diff(path.q, axis=0)).max() < 0.05      # smooth, well away from singular
 
 
 def test_steps_bound_the_sample_spacing():

@@ -1,6 +1,6 @@
 """The `armkit` command line: `app` and its subcommands, one module per group."""
 
 from armkit.cli.app import app, main
-from armkit.cli import demo, drives, ik, robots  # noqa: F401  (registers their commands on app)
+from armkit.cli import demo, drives, ik, robots, trajectory  # noqa: F401  (registers commands)
 
 __all__ = ["app", "main"]

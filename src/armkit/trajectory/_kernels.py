@@ -1,0 +1,353 @@
+"""numba kernels of the trajectory package: piecewise-polynomial evaluation, rest-to-rest
+profile timing, and the TOPP-RA passes.
+
+Evaluation comes twice, serial for small batches (no thread start-up) and parallel over chunks
+of samples, as in `armkit.kinematics._kernels`. benchmarks/trajectory.py measures each against
+scipy, ruckig, toppra or a vectorised NumPy version of the same work.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_jit = numba.njit(cache=True, nogil=True)
+_pjit = numba.njit(cache=True, nogil=True, parallel=True)
+
+PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
+_CHUNK = 16384              # samples per parallel task
+_BLOCK = 256                # samples of one piece evaluated together
+_RUN = 8                    # shorter runs of samples in one piece go one by one
+
+
+@_jit
+def _piece(breaks, t, guess):
+    """Index i of the piece with breaks[i] <= t < breaks[i + 1] (the last piece takes the end)."""
+    m = breaks.shape[0] - 1
+    if breaks[guess] <= t and (t < breaks[guess + 1] or guess == m - 1):
+        return guess
+    lo, hi = 0, m - 1
+    while lo < hi:                      # largest i with breaks[i] <= t, clipped to [0, m - 1]
+        mid = (lo + hi + 1) // 2
+        if breaks[mid] <= t:
+            lo = mid
+        else:
+            hi = mid - 1
+    return lo
+
+
+@_jit
+def _span(breaks, table, t, out, start, stop):
+    """Samples start..stop-1: out[r, s, j] = derivative r of joint j at t[s].
+
+    table[i, r, k, j] holds coefficient k of derivative r on piece i (falling factorials
+    applied, powers above K - 1 - r zero), so each derivative is one Horner pass. Sorted times
+    come in runs that share a piece; a run is evaluated with the samples in the innermost
+    loop, which the compiler vectorises (a Horner chain per sample and joint would wait on
+    itself). Times in no order fall back to one sample at a time.
+    """
+    nder, K, n = table.shape[1], table.shape[2], table.shape[3]
+    last = breaks.shape[0] - 2
+    tau, acc = np.empty(_BLOCK), np.empty(_BLOCK)
+    i, s = 0, start
+    while s < stop:
+        i = _piece(breaks, t[s], i)
+        top = breaks[i + 1] if i < last else np.inf
+        e, limit = s + 1, min(stop, s + _BLOCK)
+        while e < limit and breaks[i] <= t[e] < top:
+            e += 1
+        if e - s < _RUN:
+            x = t[s] - breaks[i]
+            for r in range(nder):
+                for j in range(n):
+                    v = table[i, r, K - 1 - r, j]
+                    for k in range(K - 2 - r, -1, -1):
+                        v = v * x + table[i, r, k, j]
+                    out[r, s, j] = v
+            s += 1
+            continue
+        count = e - s
+        for q in range(count):
+            tau[q] = t[s + q] - breaks[i]
+        for r in range(nder):
+            for j in range(n):
+                c = table[i, r, K - 1 - r, j]
+                for q in range(count):
+                    acc[q] = c
+                for k in range(K - 2 - r, -1, -1):
+                    c = table[i, r, k, j]
+                    for q in range(count):
+                        acc[q] = acc[q] * tau[q] + c
+                for q in range(count):
+                    out[r, s + q, j] = acc[q]
+        s = e
+
+
+@_jit
+def evaluate(breaks, table, t, out):
+    _span(breaks, table, t, out, 0, t.shape[0])
+
+
+@_pjit
+def evaluate_parallel(breaks, table, t, out):
+    N = t.shape[0]
+    chunks = (N + _CHUNK - 1) // _CHUNK
+    for c in numba.prange(chunks):
+        _span(breaks, table, t, out, c * _CHUNK, min(N, (c + 1) * _CHUNK))
+
+
+def run_evaluate(breaks: np.ndarray, table: np.ndarray, t: np.ndarray, out: np.ndarray) -> None:
+    """Call the serial or parallel evaluation, whichever suits the number of samples."""
+    (evaluate_parallel if t.shape[0] >= PARALLEL_FROM else evaluate)(breaks, table, t, out)
+
+
+# --- rest-to-rest profile timing (profiles.py) ------------------------------------------------
+# Each returns the phase times of one joint moving a distance D >= 0 from rest to rest:
+# (tj, ta, tv) = jerk time, accelerating time (= decelerating time), cruise time; a trapezoid
+# has tj = 0. Biagiotti & Melchiorri (2008), sections 3.2.2 and 3.4, zero end velocities.
+
+@_jit
+def _trapezoid_shortest(D, V, A):
+    if D * A >= V * V:                          # cruise phase exists
+        return 0.0, V / A, D / V - V / A
+    return 0.0, math.sqrt(D / A), 0.0
+
+
+@_jit
+def _trapezoid_within(D, V, A, T):
+    """The trapezoid taking exactly T (>= its shortest), keeping A: the cruise velocity is the
+    smaller root of v^2 - A T v + A D = 0, written 2 D / (T + sqrt(T^2 - 4 D / A))."""
+    v = 2.0 * D / (T + math.sqrt(max(T * T - 4.0 * D / A, 0.0)))
+    return 0.0, v / A, max(T - 2.0 * v / A, 0.0)
+
+
+@_jit
+def _double_s_shortest(D, V, A, J):
+    if V * J >= A * A:                          # amax reached on the way to vmax
+        tj, ta = A / J, A / J + V / A
+    else:
+        tj = math.sqrt(V / J)
+        ta = 2.0 * tj
+    tv = D / V - ta if V < math.inf else -1.0
+    if tv >= 0.0:
+        return tj, ta, tv
+    if D >= 2.0 * A * A * A / (J * J):          # vmax never reached, amax reached
+        tj = A / J
+        return tj, 0.5 * (tj + math.sqrt(tj * tj + 4.0 * D / A)), 0.0
+    tj = (D / (2.0 * J)) ** (1.0 / 3.0)
+    return tj, 2.0 * tj, 0.0
+
+
+@_jit
+def _double_s_within(D, V, A, J, T):
+    """The double S taking exactly T (>= its shortest), keeping A and J.
+
+    T = D / v + Ta(v) falls as the cruise velocity v rises, so one v fits. With amax reached
+    (v >= A^2 / J), Ta = v / A + A / J and v is the smaller root of a quadratic. Otherwise
+    Ta = 2 Tj, v = J Tj^2 and 2 Tj^3 - T Tj^2 + D / J = 0, whose root in (0, T/3] is
+    T/6 + T/3 cos(theta/3 - 2 pi/3) with cos(theta) = 1 - 54 D / (J T^3) (the trigonometric
+    solution of a cubic with three real roots), polished by two Newton steps.
+    """
+    if D <= 0.0:
+        return 0.0, 0.0, T
+    if D >= 2.0 * A * A * A / (J * J) and T <= D * J / (A * A) + 2.0 * A / J:
+        b = T - A / J
+        v = 2.0 * D / (b + math.sqrt(max(b * b - 4.0 * D / A, 0.0)))
+        ta = v / A + A / J
+        return A / J, ta, max(T - 2.0 * ta, 0.0)
+    c = min(max(1.0 - 54.0 * D / (J * T * T * T), -1.0), 1.0)
+    u = T / 6.0 + T / 3.0 * math.cos(math.acos(c) / 3.0 - 2.0 * math.pi / 3.0)
+    for _ in range(2):
+        df = 6.0 * u * u - 2.0 * T * u
+        if df != 0.0:
+            u -= (2.0 * u * u * u - T * u * u + D / J) / df
+    u = min(max(u, 0.0), T / 3.0)
+    return u, 2.0 * u, max(T - 4.0 * u, 0.0)
+
+
+@_jit
+def _phases(kind, D, sign, tj, ta, tv, times, values):
+    """One joint's phase start times (from 0) and signed top derivative per phase.
+
+    Peak values come from the timing so that the distance is exact: for these symmetric
+    rest-to-rest profiles D = v (ta + tv), v = a (ta - tj) and a = j tj.
+    """
+    v = D / (ta + tv) if ta + tv > 0.0 else 0.0
+    a = v / (ta - tj) if ta - tj > 0.0 else 0.0
+    if kind == 2:
+        _put(times, values, 0, ta, sign * a)
+        _put(times, values, 1, tv, 0.0)
+        _put(times, values, 2, ta, -sign * a)
+        return
+    j = sign * a / tj if tj > 0.0 else 0.0
+    for k, (duration, top) in enumerate(((tj, j), (ta - 2.0 * tj, 0.0), (tj, -j), (tv, 0.0),
+                                         (tj, -j), (ta - 2.0 * tj, 0.0), (tj, j))):
+        _put(times, values, k, duration, top)
+
+
+@_jit
+def _put(times, values, k, duration, top):
+    if k == 0:
+        times[0] = 0.0
+    times[k + 1] = times[k] + max(duration, 0.0)
+    values[k] = top
+
+
+@_jit
+def _timing(kind, q0, qf, V, A, J, phase, times, values):
+    """Phases of every joint of every problem p; kind 2 trapezoid, 3 double S.
+
+    With phase sync, one shape over a unit distance under the tightest limit per unit distance,
+    scaled by each joint's distance; with time sync, the slowest joint's shortest duration for
+    every joint.
+    """
+    P, n = q0.shape
+    for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
+        for j in range(n):
+            if not (math.isfinite(q0[p, j]) and math.isfinite(qf[p, j])):
+                return 1
+            if not V[p, j] > 0.0:
+                return 2
+            if not (A[p, j] > 0.0 and (kind == 3 or A[p, j] < math.inf)):
+                return 3
+            if not (0.0 < J[p, j] < math.inf):
+                return 4
+    own = [(0.0, 0.0, 0.0)] * n
+    for p in range(P):
+        if phase:
+            v1 = a1 = j1 = math.inf
+            for j in range(n):
+                D = abs(qf[p, j] - q0[p, j])
+                if D > 0.0:
+                    v1, a1, j1 = min(v1, V[p, j] / D), min(a1, A[p, j] / D), min(j1, J[p, j] / D)
+            if v1 == a1 == j1 == math.inf:
+                tj = ta = tv = 0.0
+            elif kind == 2:
+                tj, ta, tv = _trapezoid_shortest(1.0, v1, a1)
+            else:
+                tj, ta, tv = _double_s_shortest(1.0, v1, a1, j1)
+            for j in range(n):
+                d = qf[p, j] - q0[p, j]
+                _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j],
+                        values[p, j])
+            continue
+        T = 0.0
+        for j in range(n):
+            D = abs(qf[p, j] - q0[p, j])
+            if kind == 2:
+                own[j] = _trapezoid_shortest(D, V[p, j], A[p, j])
+            else:
+                own[j] = _double_s_shortest(D, V[p, j], A[p, j], J[p, j])
+            if D > 0.0:
+                T = max(T, 2.0 * own[j][1] + own[j][2])
+        for j in range(n):
+            d = qf[p, j] - q0[p, j]
+            tj, ta, tv = own[j]
+            if d == 0.0 or 2.0 * ta + tv < T * (1.0 - 1e-12):
+                # Solving for T = the joint's own shortest would amplify rounding through a
+                # square root near zero, so the slowest joint keeps its own profile.
+                if kind == 2:
+                    tj, ta, tv = _trapezoid_within(abs(d), V[p, j], A[p, j], T)
+                else:
+                    tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
+            _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j], values[p, j])
+    return 0
+
+
+def profile_phases(kind: int, q0: np.ndarray, qf: np.ndarray, V: np.ndarray, A: np.ndarray,
+                   J: np.ndarray, phase: bool) -> tuple[np.ndarray, np.ndarray, int]:
+    """Phase times (P, n, K + 1) and top derivatives (P, n, K) for q0 ... J of shape (P, n),
+    and 0, or the first bad input: 1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit."""
+    P, n = q0.shape
+    K = 3 if kind == 2 else 7
+    times, values = np.empty((P, n, K + 1)), np.empty((P, n, K))
+    return times, values, _timing(kind, q0, qf, V, A, J, phase, times, values)
+
+
+# --- TOPP-RA (retime.py) -----------------------------------------------------------------------
+# Path q(s) on a grid s_0 < ... < s_N; unknowns x_i = sdot^2 at s_i and u_i = sddot on
+# [s_i, s_{i+1}], with x_{i+1} = x_i + 2 ds_i u_i. Stage i's constraints are rows
+# alpha u + beta x <= gamma: joint accelerations q' u + q'' x within +-amax at s_i and, with
+# x_{i+1} put in, at s_{i+1} (toppra's "interpolation" discretisation), and x_{i+1} inside the
+# next controllable set [lo, hi].
+
+@_jit
+def _rows(i, dq, ddq, amax, ds, lo_next, hi_next, alpha, beta, gamma):
+    """Fill stage i's rows; returns their count."""
+    n = dq.shape[1]
+    k = 0
+    for j in range(n):
+        a0, b0 = dq[i, j], ddq[i, j]
+        a1, b1 = dq[i + 1, j] + 2.0 * ds * ddq[i + 1, j], ddq[i + 1, j]
+        for a, b in ((a0, b0), (a1, b1)):
+            alpha[k], beta[k], gamma[k] = a, b, amax[j]
+            alpha[k + 1], beta[k + 1], gamma[k + 1] = -a, -b, amax[j]
+            k += 2
+    alpha[k], beta[k], gamma[k] = 2.0 * ds, 1.0, hi_next
+    alpha[k + 1], beta[k + 1], gamma[k + 1] = -2.0 * ds, -1.0, -lo_next
+    return k + 2
+
+
+@_jit
+def _x_range(count, alpha, beta, gamma, x_top):
+    """Smallest and largest x in [0, x_top] for which some u meets every row (Fourier-Motzkin).
+
+    u is bounded above by rows with alpha > 0 and below by rows with alpha < 0; a pair (k
+    below, l above) is compatible iff (beta_k alpha_l - beta_l alpha_k) x <= gamma_k alpha_l -
+    gamma_l alpha_k. Rows with alpha = 0 bound x directly. Empty: lo > hi.
+    """
+    lo, hi = 0.0, x_top
+    for k in range(count):
+        if alpha[k] == 0.0:
+            if beta[k] > 0.0:
+                hi = min(hi, gamma[k] / beta[k])
+            elif beta[k] < 0.0:
+                lo = max(lo, gamma[k] / beta[k])
+            elif gamma[k] < 0.0:
+                return 1.0, 0.0
+        elif alpha[k] < 0.0:
+            for l in range(count):
+                if alpha[l] > 0.0:
+                    g = beta[k] * alpha[l] - beta[l] * alpha[k]
+                    h = gamma[k] * alpha[l] - gamma[l] * alpha[k]
+                    if g > 0.0:
+                        hi = min(hi, h / g)
+                    elif g < 0.0:
+                        lo = max(lo, h / g)
+                    elif h < 0.0:
+                        return 1.0, 0.0
+    return lo, hi
+
+
+@_jit
+def topp(dq, ddq, xv, amax, ds, end_top, free_start, x):
+    """Backward pass (controllable sets), then the greedy forward pass; x is filled.
+
+    The end set is [0, end_top]; the start is x = 0, or with free_start the largest
+    controllable x. Returns -1 on success, else the first grid index where the path cannot be
+    followed.
+    """
+    N = ds.shape[0]
+    rows = 4 * dq.shape[1] + 2
+    alpha, beta, gamma = np.empty(rows), np.empty(rows), np.empty(rows)
+    lo, hi = np.empty(N + 1), np.empty(N + 1)
+    lo[N], hi[N] = 0.0, end_top
+    for i in range(N - 1, -1, -1):
+        count = _rows(i, dq, ddq, amax, ds[i], lo[i + 1], hi[i + 1], alpha, beta, gamma)
+        lo[i], hi[i] = _x_range(count, alpha, beta, gamma, xv[i])
+        if lo[i] > hi[i] * (1.0 + 1e-9) + 1e-12:
+            return i
+        hi[i] = max(hi[i], lo[i])
+    x[0] = hi[0] if free_start else 0.0
+    if lo[0] > x[0] + 1e-12:
+        return 0
+    for i in range(N):
+        count = _rows(i, dq, ddq, amax, ds[i], lo[i + 1], hi[i + 1], alpha, beta, gamma)
+        u = np.inf
+        for k in range(count):                  # the largest u every row allows
+            if alpha[k] > 0.0:
+                u = min(u, (gamma[k] - beta[k] * x[i]) / alpha[k])
+        x[i + 1] = min(max(x[i] + 2.0 * ds[i] * u, lo[i + 1]), hi[i + 1])
+    return -1

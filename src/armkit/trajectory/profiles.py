@@ -1,0 +1,237 @@
+"""Rest-to-rest profiles under limits: trapezoidal velocity and jerk-limited (double S).
+
+Both are closed forms (Biagiotti & Melchiorri, *Trajectory Planning for Automatic Machines and
+Robots*, 2008, sections 3.2.2 and 3.4), vectorised over any number of problems and joints:
+
+- trapezoidal: accelerate at amax, cruise at vmax, decelerate; triangular (no cruise) when the
+  distance is too short to reach vmax;
+- jerk-limited (seven segments): jerk +-jmax, acceleration up to amax, velocity up to vmax;
+  segments drop out when a limit is not reached.
+
+Synchronisation, so that every joint starts and finishes together:
+
+- ``sync="time"`` (default; what ruckig does): the duration is the longest of the joints' own
+  shortest durations; every other joint keeps its acceleration (and jerk) limit and lowers its
+  cruise velocity until it takes exactly as long (a quadratic, or for a profile that never
+  reaches amax the cubic ``2 Tj^3 - T Tj^2 + D/jmax = 0`` in closed form).
+- ``sync="phase"``: one profile shape for all joints, scaled by each joint's distance, so the
+  motion is a straight line in joint space. Its limits are the tightest of ``limit_j / D_j``;
+  never faster than "time", often a little slower.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armkit.errors import InputError
+from armkit.trajectory import _kernels
+from armkit.trajectory.piecewise import Trajectory, merge
+
+Sync = Literal["time", "phase"]
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Synchronised rest-to-rest profiles; leading shape (...) one per problem, n joints.
+
+    Attributes
+    ----------
+    duration : ndarray, shape (...)
+        s; the same for every joint of a problem.
+    times : ndarray, shape (..., n, P + 1)
+        Start of each phase and the end, from 0 to duration (phases may have zero length).
+    values : ndarray, shape (..., n, P)
+        The constant highest derivative in each phase, signed: acceleration (trapezoid, P = 3)
+        or jerk (jerk-limited, P = 7); rad/s^2 or rad/s^3 (m/... for prismatic joints).
+    order : int
+        2 for trapezoidal, 3 for jerk-limited.
+    q0, qf : ndarray, shape (..., n)
+    """
+
+    duration: NDArray
+    times: NDArray
+    values: NDArray
+    order: int
+    q0: NDArray
+    qf: NDArray
+
+    def peaks(self) -> tuple[NDArray, NDArray, NDArray]:
+        """Peak |velocity|, |acceleration| and |jerk| (inf for a trapezoid) per joint (..., n)."""
+        dt = np.diff(self.times, axis=-1)
+        if self.order == 2:
+            a = np.abs(self.values[..., 0])
+            return a * dt[..., 0], a, np.where(a > 0, np.inf, 0.0)
+        j = np.abs(self.values[..., 0])
+        a = j * dt[..., 0]
+        return a * (dt[..., 0] + dt[..., 1]), a, j
+
+
+def trapezoidal_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
+                        sync: Sync = "time") -> Profile:
+    """Synchronised trapezoidal-velocity profiles, batch-first.
+
+    Parameters
+    ----------
+    q0, qf : array_like, shape (..., n)
+        Start and goal per problem (rad or m per joint); leading shapes broadcast.
+    vmax, amax : array_like, broadcastable to (..., n)
+        Positive limits (rad/s, rad/s^2; m/s, m/s^2); vmax may be inf.
+    sync : {"time", "phase"}
+        See the module notes.
+
+    Returns
+    -------
+    Profile
+        ``order`` 2: phases accelerate, cruise, decelerate.
+    """
+    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax)])
+    return _profile(2, arrays, ("vmax", "amax"), sync)
+
+
+def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+                         jmax: ArrayLike, *, sync: Sync = "time") -> Profile:
+    """Synchronised jerk-limited (double S, seven segment) profiles, batch-first.
+
+    Parameters
+    ----------
+    q0, qf : array_like, shape (..., n)
+        Start and goal per problem (rad or m per joint); leading shapes broadcast.
+    vmax, amax, jmax : array_like, broadcastable to (..., n)
+        Positive limits; vmax and amax may be inf, jmax must be finite.
+    sync : {"time", "phase"}
+        See the module notes.
+
+    Returns
+    -------
+    Profile
+        ``order`` 3: jerk +j, 0, -j, 0 (cruise), -j, 0, +j.
+
+    Example
+    -------
+    >>> p = jerk_limited_profile(np.zeros((1000, 6)), goals, 1.0, 2.0, 10.0)
+    >>> p.duration.shape
+    (1000,)
+    """
+    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax), ("jmax", jmax)])
+    return _profile(3, arrays, ("vmax", "amax", "jmax"), sync)
+
+
+def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
+                sync: Sync = "time") -> Trajectory:
+    """Trapezoidal-velocity motion from q0 to qf, all joints starting and ending together.
+
+    Parameters
+    ----------
+    q0, qf : array_like, shape (n,)
+        Start and goal (rad or m per joint).
+    vmax, amax : float or array_like (n,)
+        Positive limits (rad/s, rad/s^2; m/s, m/s^2), e.g. ``robot.chain.velocity_limits``.
+    sync : {"time", "phase"}
+        See the module notes.
+
+    Returns
+    -------
+    Trajectory
+        Piecewise quadratic from t = 0, label ``"trapezoidal"``.
+    """
+    return profile_trajectory(trapezoidal_profile(*_single(q0, qf), vmax, amax, sync=sync),
+                              "trapezoidal")
+
+
+def jerk_limited(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+                 jmax: ArrayLike, *, sync: Sync = "time") -> Trajectory:
+    """Jerk-limited (double S) motion from q0 to qf, all joints starting and ending together.
+
+    Parameters
+    ----------
+    q0, qf : array_like, shape (n,)
+        Start and goal (rad or m per joint).
+    vmax, amax, jmax : float or array_like (n,)
+        Positive limits (rad/s, rad/s^2, rad/s^3; m/... for prismatic joints).
+    sync : {"time", "phase"}
+        See the module notes.
+
+    Returns
+    -------
+    Trajectory
+        Piecewise cubic from t = 0, label ``"jerk-limited"``; the duration equals ruckig's
+        (time synchronisation) for the same limits.
+    """
+    return profile_trajectory(jerk_limited_profile(*_single(q0, qf), vmax, amax, jmax,
+                                                   sync=sync), "jerk-limited")
+
+
+def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
+    """The `Trajectory` of one problem's profile (leading shape ()), breaks merged over joints.
+
+    Each joint's phases are integrated exactly from rest at q0: on phase k the polynomial is
+    ``q + v tau + a tau^2 / 2 (+ j tau^3 / 6)`` with the state at the phase's start.
+    """
+    if profile.duration.ndim != 0:
+        raise InputError(f"profile: expected one problem (leading shape ()), found "
+                         f"{profile.duration.shape}")
+    if not profile.duration > 0:
+        raise InputError("qf: expected a goal away from q0, found the same joint values")
+    n, P, order = profile.q0.shape[0], profile.values.shape[-1], profile.order
+    dt = np.diff(profile.times, axis=-1)
+    factorials = np.cumprod(np.r_[1.0, np.arange(1, order + 1)])[:, None]
+    state = np.zeros((order + 1, n))                  # q, v, a (, j) at the phase's start
+    state[0] = profile.q0
+    coefficients = np.empty((n, P, order + 1))
+    for k in range(P):
+        state[order] = profile.values[:, k]
+        coefficients[:, k] = (state / factorials).T
+        taylor = dt[:, k] ** np.arange(order + 1)[:, None] / factorials    # tau^i / i!
+        state = np.array([np.sum(state[r:] * taylor[:order + 1 - r], axis=0)
+                          for r in range(order + 1)])
+    breaks, c = merge(profile.times, coefficients)
+    return Trajectory(breaks, c, label=label)
+
+
+def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike]]):
+    """q0, qf and the limits as float arrays of one shape (..., n); the kernel checks values."""
+    raw = [q0, qf] + [v for _, v in lims]
+    try:
+        arrays = [np.asarray(x, dtype=float) for x in raw]
+        shapes = {a.shape for a in arrays}
+        shape = shapes.pop() if len(shapes) == 1 else np.broadcast_shapes(*shapes)
+    except (TypeError, ValueError):
+        raise InputError(f"q0, qf, limits: expected numbers of shapes that broadcast to "
+                         f"(..., n), found {[np.shape(x) for x in raw]}") from None
+    if not shape:
+        raise InputError("q0, qf: expected shape (..., n), found scalars")
+    return [a if a.shape == shape else np.full(shape, a) if a.ndim == 0 else
+            np.broadcast_to(a, shape) for a in arrays]
+
+
+def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
+    a, b = np.asarray(q0, dtype=float), np.asarray(qf, dtype=float)
+    if a.ndim != 1 or a.shape != b.shape:
+        raise InputError(f"q0, qf: expected shape (n,) each (for batches use the *_profile "
+                         f"functions), found {a.shape} and {b.shape}")
+    return a, b
+
+
+def _profile(order: int, arrays: list[NDArray], names: tuple[str, ...], sync: str) -> Profile:
+    """Run the kernel on q0, qf, vmax, amax(, jmax) of shape (..., n)."""
+    if sync not in ("time", "phase"):
+        raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
+    shape, n = arrays[0].shape, arrays[0].shape[-1]
+    if order == 2:
+        arrays = arrays + [np.ones(shape)]          # the kernel's unused jerk limit
+    times, values, bad = _kernels.profile_phases(
+        order, *(np.ascontiguousarray(x).reshape(-1, n) for x in arrays), sync == "phase")
+    if bad == 1:
+        raise InputError("q0, qf: expected finite joint values, found NaN or inf")
+    if bad:
+        name = names[bad - 2]
+        finite = "" if name == "vmax" or (name == "amax" and order == 3) else " finite"
+        raise InputError(f"{name}: expected positive{finite} limits, found "
+                         f"{np.unique(arrays[bad]).tolist()}")
+    times = times.reshape(shape + times.shape[-1:])
+    return Profile(times[..., 0, -1].copy(), times, values.reshape(shape + values.shape[-1:]),
+                   order, arrays[0], arrays[1])

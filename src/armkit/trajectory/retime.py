@@ -1,0 +1,192 @@
+"""Retiming: the fastest motion along a joint path within velocity and acceleration limits.
+
+Time-optimal path parametrisation by reachability analysis, TOPP-RA (H. Pham, Q.-C. Pham, "A
+new approach to time-optimal path parameterization based on reachability analysis", IEEE T-RO
+34(3), 2018), the algorithm of the toppra package, written here for joint limits only:
+
+1. the path q(s) is cut into a grid s_0 < ... < s_N (uniform, plus the path's own breaks); the
+   unknowns are x_i = (ds/dt)^2 at each grid point and a constant u_i = d2s/dt2 between;
+2. a backward pass computes, for each grid point, the interval of x from which the end can
+   still be reached at rest; each step is a two-variable linear programme, solved exactly by
+   eliminating u;
+3. a forward pass from rest takes the largest u that keeps x inside those intervals.
+
+The motion starts and ends at rest: x = 0 at the ends, except where the path's own derivative
+q'(s) is zero there (a spline with zero end velocities), where any x leaves the arm at rest and
+the largest one is taken (toppra, given ``sd_start = 0``, keeps x = 0 and is slower there, by
+an amount that shrinks only as 1 / grid).
+
+Joint acceleration ``q' u + q'' x`` is held to its limits at both ends of every grid interval
+(toppra's "interpolation" discretisation), joint velocity ``q' sqrt(x)`` at the grid points,
+with a second-order allowance for the bound's sag between them. Between those points they can
+still overshoot by a hair, so the result's peaks are found on every interval (8 samples, then
+Newton steps) and, if needed, the motion is slowed uniformly by the factor that brings them
+within (of the order of 1e-5 at the default grid).
+
+The motion is q(s(t)) with s(t) quadratic on each grid interval, so a cubic path gives an
+exact piecewise polynomial of degree 6 in time. Jerk is not limited: the acceleration of a
+time-optimal motion is bang-bang and steps at the switches; for jerk-limited motion between rest
+states use `armkit.trajectory.jerk_limited`.
+"""
+
+from __future__ import annotations
+
+from math import comb
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from armkit.errors import InputError
+from armkit.trajectory import _kernels
+from armkit.trajectory.piecewise import Trajectory, peak, shift
+from armkit.trajectory.polynomial import limits
+from armkit.trajectory.spline import spline
+
+CHECKS_PER_INTERVAL = 8
+
+
+def waypoint_path(points: ArrayLike) -> Trajectory:
+    """A smooth joint path through waypoints, parametrised by joint-space arc length.
+
+    A natural cubic spline (zero second derivative at the ends) with knots at the cumulative
+    Euclidean distances between waypoints, so that its "time" is a path parameter s (rad or m
+    of joint-space distance), ready for `retime`.
+
+    Parameters
+    ----------
+    points : array_like, shape (k, n)
+        Waypoints, k >= 2, consecutive ones distinct.
+
+    Returns
+    -------
+    Trajectory
+        With s in place of time, label ``"path"``.
+    """
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[0] < 2:
+        raise InputError(f"points: expected shape (k, n) with k >= 2 waypoints, found {p.shape}")
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
+    if not (np.diff(s) > 0).all():
+        raise InputError("points: expected distinct consecutive waypoints, found a repeat")
+    tr = spline(s, p, 3, start_velocity=None, end_velocity=None, start_acceleration=0.0,
+                end_acceleration=0.0)
+    return Trajectory(tr.breaks, tr.coefficients, tr.knots, "path")
+
+
+def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
+           grid: int = 1000) -> Trajectory:
+    """The time-optimal motion along a path, from rest to rest, within joint limits.
+
+    Parameters
+    ----------
+    path : Trajectory or array_like (k, n)
+        The geometric path: a trajectory whose time is read as the path parameter, or
+        waypoints (see `waypoint_path`).
+    vmax : float or array_like (n,)
+        Velocity limits (rad/s, m/s); inf where none.
+    amax : float or array_like (n,)
+        Acceleration limits (rad/s^2, m/s^2), finite.
+    grid : int
+        Number of uniform grid intervals; the path's breaks are added to them.
+
+    Returns
+    -------
+    Trajectory
+        The same path in time, from t = 0, label ``"retimed"``; ``knots`` are the times the
+        path's knots (waypoints) are passed.
+
+    Raises
+    ------
+    InputError
+        For bad limits or grid, or a path that cannot be followed within the limits (a sharp
+        corner).
+
+    Example
+    -------
+    >>> r = armkit.robot("inspection_6dof")
+    >>> tr = retime(waypoints, r.chain.velocity_limits, r.chain.acceleration_limits)
+    """
+    if not isinstance(path, Trajectory):
+        path = waypoint_path(path)
+    n = path.n
+    V, A = limits("vmax", vmax, n), limits("amax", amax, n)
+    if not np.isfinite(A).all():
+        raise InputError(f"amax: expected finite acceleration limits, found {A.tolist()}")
+    if not (isinstance(grid, (int, np.integer)) and grid >= 1):
+        raise InputError(f"grid: expected a positive number of intervals, found {grid!r}")
+    s = _grid(path, int(grid))
+    ds = np.diff(s)
+    # The path at the grid points and halfway between (even and odd rows).
+    geo = path.sample(np.r_[np.c_[s[:-1], s[:-1] + ds / 2].ravel(), s[-1]])
+    dq, ddq = np.ascontiguousarray(geo.qd[::2]), np.ascontiguousarray(geo.qdd[::2])
+    with np.errstate(divide="ignore"):
+        xv = np.min((V / np.abs(geo.qd)) ** 2, axis=1)       # inf where q' = 0
+    # x is linear in s between grid points while the bound V^2 / q'^2 bends: where it sags
+    # below its chord, x could cross it mid-interval. Lowering both ends by the sag at the
+    # midpoint keeps the line under a quadratic bound; the cost is second order in the step.
+    # Where the sag is deeper than the bound itself (a coarse grid), the least of the point's
+    # and its midpoints' bounds serves instead.
+    ends, mid = xv[::2], xv[1::2]
+    with np.errstate(invalid="ignore"):
+        sag = np.where(np.isfinite(ends[:-1] + ends[1:] + mid),
+                       np.maximum((ends[:-1] + ends[1:]) / 2 - mid, 0.0), 0.0)
+    nearest = np.minimum.reduce([ends, np.r_[np.inf, mid], np.r_[mid, np.inf]])
+    xv = np.maximum(ends - np.maximum(np.r_[0.0, sag], np.r_[sag, 0.0]), nearest)
+    # Rest means q' ds/dt = 0: where the path itself stands still (q'(s) = 0, as at the ends of
+    # a spline with zero end velocities) ds/dt need not be zero, and the fastest motion leaves
+    # and arrives with ds/dt > 0 (near such an end q ~ q'' s^2 / 2, so a constant acceleration
+    # needs s ~ t). Fixing ds/dt = 0 there instead costs a time that shrinks only as 1 / grid.
+    still = np.abs(dq[[0, -1]]).max(axis=1) <= 1e-12 * max(np.abs(dq).max(), 1e-300)
+    with np.errstate(divide="ignore"):
+        end_top = min(xv[-1], np.min(A / np.abs(ddq[-1]))) if still[1] else 0.0
+    x = np.empty(s.shape[0])
+    stuck = _kernels.topp(dq, ddq, xv, A, ds, end_top, bool(still[0]), x)
+    if stuck >= 0:
+        raise InputError(f"path: cannot be followed within the limits near s = {s[stuck]:.6g}")
+    sd = np.sqrt(np.maximum(x, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dt = 2 * ds / (sd[:-1] + sd[1:])
+    if not np.isfinite(dt).all():
+        raise InputError("path: the motion stops inside the path (ds/dt = 0 at two neighbouring "
+                         "grid points); check the path for a corner")
+    u = (x[1:] - x[:-1]) / (2 * ds)
+    t = np.r_[0.0, np.cumsum(dt)]
+    tr = Trajectory(t, _compose(path, s, sd[:-1], u), knots=np.interp(path.knots, s, t),
+                    label="retimed")
+    return tr.scaled(_overshoot(tr, V, A))
+
+
+def _grid(path: Trajectory, count: int) -> NDArray:
+    """Uniform grid over the path plus its breaks, duplicates (closer than 1e-9 of a step) out."""
+    s = np.union1d(np.linspace(path.start, path.end, count + 1), path.breaks)
+    keep = np.r_[True, np.diff(s) > 1e-9 * path.duration / count]
+    s = s[keep]
+    s[-1] = path.end
+    return s
+
+
+def _compose(path: Trajectory, s: NDArray, sd: NDArray, u: NDArray) -> NDArray:
+    """Coefficients of q(s(tau)) per grid interval, s(tau) = s_i + sd_i tau + u_i tau^2 / 2.
+
+    With the path's piece re-expanded about s_i as sum_k c_k d^k, d = tau (sd + u tau / 2):
+    d^k = sum_l C(k, l) sd^(k - l) (u/2)^l tau^(k + l).
+    """
+    piece = np.clip(np.searchsorted(path.breaks, s[:-1], side="right") - 1, 0,
+                    path.breaks.shape[0] - 2)
+    c = shift(path.coefficients[piece], s[:-1] - path.breaks[piece])       # (N, K, n)
+    K = c.shape[1]
+    out = np.zeros((c.shape[0], 2 * K - 1, c.shape[2]))
+    half = u / 2
+    for k in range(K):
+        for l in range(k + 1):
+            w = comb(k, l) * sd ** (k - l) * half ** l
+            out[:, k + l] += c[:, k] * w[:, None]
+    return out
+
+
+def _overshoot(tr: Trajectory, V: NDArray, A: NDArray) -> float:
+    """The uniform slow-down (>= 1) that brings the peak velocity and acceleration of every
+    piece (`armkit.trajectory.piecewise.peak`) within the limits."""
+    rv = np.max(peak(tr, 1, CHECKS_PER_INTERVAL) / V)
+    ra = np.max(peak(tr, 2, CHECKS_PER_INTERVAL) / A)
+    return float(max(1.0, rv, np.sqrt(ra)))

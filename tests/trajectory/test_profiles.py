@@ -1,0 +1,161 @@
+"""Trapezoidal and jerk-limited profiles: goal reached, limits kept, joints synchronised, and
+durations (and positions) equal to ruckig's for the same limits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import ruckig
+from hypothesis import given
+from hypothesis import strategies as st
+
+from armkit.errors import InputError
+from armkit.trajectory import (jerk_limited, jerk_limited_profile, trapezoidal,
+                               trapezoidal_profile)
+
+RTOL = 1e-9          # limits and goal, relative
+
+
+def ruckig_trajectory(q0, qf, vmax, amax, jmax):
+    n = len(q0)
+    inp = ruckig.InputParameter(n)
+    inp.current_position, inp.target_position = list(q0), list(qf)
+    inp.max_velocity, inp.max_acceleration, inp.max_jerk = (list(np.broadcast_to(x, n))
+                                                            for x in (vmax, amax, jmax))
+    out = ruckig.Trajectory(n)
+    assert ruckig.Ruckig(n).calculate(inp, out) == ruckig.Result.Working
+    return out
+
+
+def check_motion(tr, q0, qf, vmax, amax, jmax=np.inf):
+    """Starts and ends at rest at q0 and qf, within every limit, on a dense sample."""
+    s = tr.sample(np.r_[np.linspace(tr.start, tr.end, 20001), tr.breaks])
+    ends = tr.sample([tr.start, tr.end])
+    scale = 1.0 + np.abs(qf - q0).max()
+    np.testing.assert_allclose(ends.q, [q0, qf], atol=1e-12 * scale)
+    np.testing.assert_allclose(ends.qd, 0.0, atol=1e-12 * scale)
+    assert (np.abs(s.qd) <= np.broadcast_to(vmax, q0.shape) * (1 + RTOL)).all()
+    assert (np.abs(s.qdd) <= np.broadcast_to(amax, q0.shape) * (1 + RTOL)).all()
+    if np.isfinite(jmax).all():
+        np.testing.assert_allclose(ends.qdd, 0.0, atol=1e-12 * scale)
+        assert (np.abs(s.qddd) <= np.broadcast_to(jmax, q0.shape) * (1 + RTOL)).all()
+
+
+def random_case(seed: int, n: int = 6):
+    rng = np.random.default_rng(seed)
+    return (rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(0.2, 2.0, n),
+            rng.uniform(0.5, 5.0, n), rng.uniform(1.0, 50.0, n))
+
+
+def test_jerk_limited_durations_equal_ruckigs():
+    rng = np.random.default_rng(0)
+    q0, qf = rng.uniform(-3, 3, (300, 6)), rng.uniform(-3, 3, (300, 6))
+    for k in range(3):                                 # the limits vary, and with them the cases
+        _, _, vmax, amax, jmax = random_case(k)
+        ours = jerk_limited_profile(q0, qf, vmax, amax, jmax).duration
+        theirs = [ruckig_trajectory(a, b, vmax, amax, jmax).duration for a, b in zip(q0, qf)]
+        np.testing.assert_allclose(ours, theirs, rtol=1e-9)       # target: 0.1 %
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_jerk_limited_motion_matches_ruckig_and_keeps_limits(seed):
+    q0, qf, vmax, amax, jmax = random_case(seed)
+    tr = jerk_limited(q0, qf, vmax, amax, jmax)
+    reference = ruckig_trajectory(q0, qf, vmax, amax, jmax)
+    assert tr.duration == pytest.approx(reference.duration, rel=1e-9)
+    t = np.linspace(0, tr.duration, 37)
+    theirs = np.array([reference.at_time(x)[0] for x in t])
+    np.testing.assert_allclose(tr.evaluate(t), theirs, atol=1e-9)
+    check_motion(tr, q0, qf, vmax, amax, jmax)
+
+
+@pytest.mark.parametrize("D, phases", [
+    (10.0, 7),          # every limit reached: jerk, constant acceleration, cruise
+    (0.4, 6),           # vmax not reached: no cruise
+    (0.01, 4),          # neither vmax nor amax: jerk phases only
+])
+def test_double_s_drops_the_segments_it_does_not_need(D, phases):
+    tr = jerk_limited([0.0], [D], 1.0, 2.0, 10.0)
+    assert len(tr.breaks) - 1 == phases
+    reference = ruckig_trajectory([0.0], [D], 1.0, 2.0, 10.0)
+    assert tr.duration == pytest.approx(reference.duration, rel=1e-12)
+
+
+def test_trapezoid_closed_form_and_triangle_when_short():
+    tr = trapezoidal([0.0], [5.0], 1.0, 2.0)
+    assert tr.duration == pytest.approx(5.0 / 1.0 + 1.0 / 2.0, rel=1e-14)
+    tri = trapezoidal([0.0], [0.3], 1.0, 2.0)
+    assert tri.duration == pytest.approx(2 * np.sqrt(0.3 / 2.0), rel=1e-14)
+    assert len(tri.breaks) == 3                              # accelerate, decelerate
+    assert np.abs(tri.sample_uniform(1001).qd).max() < 1.0   # never reaches vmax
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_trapezoid_time_sync_keeps_limits_and_ends_together(seed):
+    q0, qf, vmax, amax, _ = random_case(seed)
+    tr = trapezoidal(q0, qf, vmax, amax)
+    D = np.abs(qf - q0)
+    own = np.where(D * amax >= vmax**2, D / vmax + vmax / amax, 2 * np.sqrt(D / amax))
+    assert tr.duration == pytest.approx(own.max(), rel=1e-12)       # the slowest joint's
+    check_motion(tr, q0, qf, vmax, amax)
+
+
+@pytest.mark.parametrize("build", [lambda *a: trapezoidal(*a[:4], sync="phase"),
+                                   lambda *a: jerk_limited(*a, sync="phase")])
+def test_phase_sync_is_a_straight_line_in_joint_space(build):
+    q0, qf, vmax, amax, jmax = random_case(7)
+    tr = build(q0, qf, vmax, amax, jmax)
+    s = tr.sample_uniform(501)
+    progress = (s.q - q0) / (qf - q0)                      # the same fraction for every joint
+    np.testing.assert_allclose(progress, np.broadcast_to(progress[:, :1], progress.shape),
+                               atol=1e-12)
+    check_motion(tr, q0, qf, vmax, amax, jmax if tr.label == "jerk-limited" else np.inf)
+    time_sync = (jerk_limited(q0, qf, vmax, amax, jmax) if tr.label == "jerk-limited"
+                 else trapezoidal(q0, qf, vmax, amax))
+    assert tr.duration >= time_sync.duration * (1 - 1e-12)
+
+
+def test_profiles_are_batch_first():
+    rng = np.random.default_rng(4)
+    q0, qf = rng.uniform(-1, 1, (2, 3, 4)), rng.uniform(-1, 1, (2, 3, 4))
+    p = jerk_limited_profile(q0, qf, 1.0, 2.0, [5, 6, 7, 8])
+    assert p.duration.shape == (2, 3) and p.times.shape == (2, 3, 4, 8)
+    for index in np.ndindex(2, 3):
+        one = jerk_limited_profile(q0[index], qf[index], 1.0, 2.0, [5, 6, 7, 8])
+        np.testing.assert_array_equal(p.times[index], one.times)
+    v, a, j = p.peaks()
+    assert (v <= 1 + 1e-12).all() and (a <= 2 + 1e-12).all()
+    assert (j <= np.r_[5, 6, 7, 8] * (1 + 1e-12)).all()
+    assert trapezoidal_profile(q0, qf, 1.0, 2.0).times.shape == (2, 3, 4, 4)
+
+
+def test_a_joint_that_does_not_move_stays_put():
+    tr = jerk_limited([0.0, 1.0], [2.0, 1.0], 1.0, 1.0, 1.0)
+    np.testing.assert_array_equal(tr.sample_uniform(100).q[:, 1], 1.0)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: jerk_limited([0.0], [1.0], 1.0, 1.0, np.inf), "jmax: expected positive finite"),
+    (lambda: trapezoidal([0.0], [1.0], 1.0, -1.0), "amax: expected positive finite"),
+    (lambda: trapezoidal([0.0, 1.0], [1.0, 1.0], [1.0, 2.0, 3.0], 1.0), "broadcast"),
+    (lambda: jerk_limited([1.0], [1.0], 1.0, 1.0, 1.0), "qf: expected a goal away from q0"),
+    (lambda: trapezoidal(np.zeros((2, 2)), np.ones((2, 2)), 1.0, 1.0), "_profile functions"),
+    (lambda: trapezoidal([0.0], [1.0], 1.0, 1.0, sync="space"), "sync: expected"),
+])
+def test_bad_input(call, words):
+    with pytest.raises(InputError, match=words):
+        call()
+
+
+limits = st.floats(0.05, 20.0)
+
+
+@given(st.lists(st.tuples(st.floats(-5, 5), st.floats(-5, 5), limits, limits, limits),
+                min_size=1, max_size=4),
+       st.sampled_from(["time", "phase"]))
+def test_limits_and_goal_hold_for_random_cases(joints, sync):
+    q0, qf, vmax, amax, jmax = (np.array(x) for x in zip(*joints))
+    if np.abs(qf - q0).max() < 1e-6:
+        return
+    check_motion(jerk_limited(q0, qf, vmax, amax, jmax, sync=sync), q0, qf, vmax, amax, jmax)
+    check_motion(trapezoidal(q0, qf, vmax, amax, sync=sync), q0, qf, vmax, amax)
