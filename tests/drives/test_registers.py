@@ -89,9 +89,10 @@ def test_example_maps_load():
     assert w.joints[0].word_order == "little"
 
 
-def test_packaged_default_map_is_the_example():
-    packaged = ROOT / "src" / "armkit" / "drives" / "inspection_6dof.map.yaml"
-    assert packaged.read_text() == INSPECTION.read_text()
+@pytest.mark.parametrize("example", [INSPECTION, WATER])
+def test_packaged_maps_are_the_examples(example):
+    packaged = ROOT / "src" / "armkit" / "drives" / example.name
+    assert packaged.read_text() == example.read_text()
 
 
 def test_robot_argument_overrides_the_file(tmp_path):
