@@ -464,7 +464,8 @@ def seed_starts(robot, targets: np.ndarray, mask: np.ndarray, length: float, cou
         d = _features(T, mask, length)[None, :, :] - wanted[:, None, :]
         return Q[np.argsort(np.einsum("nkd,nkd->nk", d, d), axis=1)[:, :count]]
     near = min(2 * count, samples)
-    _, idx = cKDTree(T[:, :3, 3]).query(targets[:, :3, 3], k=near, workers=-1)
+    _, idx = cKDTree(T[:, :3, 3]).query(targets[:, :3, 3], k=near)     # one thread: for a
+    # few thousand queries, starting more costs more than they save
     idx = np.reshape(idx, (N, near))
     d = _features(T, mask, length)[idx] - wanted[:, None, :]
     best = np.argsort(np.einsum("nkd,nkd->nk", d, d), axis=1)[:, :count]
