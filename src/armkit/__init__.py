@@ -13,10 +13,12 @@ from armkit.kinematics import (condition_number, fk, fk_frames, jacobian, jacobi
                                jacobian_dot, manipulability, min_singular_value,
                                singular_values, tool_acceleration, tool_velocity)
 from armkit.model import Robot, load_robot, robot, robots, save_robot
+from armkit.workspace import Section, Workspace, workspace
 
 __version__ = "0.1.0"
 
 __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot", "robot",
            "robots", "load_robot", "save_robot", "fk", "fk_frames", "jacobian",
            "jacobian_analytic", "jacobian_dot", "tool_velocity", "tool_acceleration",
-           "singular_values", "manipulability", "min_singular_value", "condition_number"]
+           "singular_values", "manipulability", "min_singular_value", "condition_number",
+           "workspace", "Workspace", "Section"]
