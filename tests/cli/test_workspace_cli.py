@@ -82,7 +82,9 @@ def test_on_a_dask_cluster_the_numbers_are_the_local_ones(tmp_path, dask_client)
     (("-n", "0"), "armkit: n: expected at least 1, found 0"),
     (("-n", "lots"), "armkit: N: expected a whole number such as 1000000 or 1e6, found 'lots'"),
     (("-n", "2.5"), "armkit: N: expected a whole number"),
-    (("--resolution", "-5"), "armkit: resolution: expected a positive voxel edge (m)"),
+    (("--resolution", "-5"), "armkit: --resolution: expected a positive voxel edge in mm, "
+                             "found -5"),
+    (("--resolution", "0.001"), "armkit: resolution: expected at least 0.000202 m"),
     (("--scheduler", "nowhere"), "armkit: scheduler: expected a Dask scheduler at nowhere"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, args, words):

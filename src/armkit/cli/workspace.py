@@ -59,16 +59,16 @@ def workspace(robot: RobotArg,
     samples = _count(n)
     kwargs = dict(seed=seed, scheduler=scheduler)
     if resolution is not None:
+        if not (math.isfinite(resolution) and resolution > 0):
+            raise InputError(f"--resolution: expected a positive voxel edge in "
+                             f"{model.units.length}, found {resolution:g}")
         kwargs["resolution"] = float(model.units.length_to_si(resolution))
-    if samples >= PROGRESS_FROM:
-        with Progress(TextColumn("sampling"), BarColumn(), MofNCompleteColumn(),
-                      TimeRemainingColumn(), console=stderr, transient=True) as bar:
-            task = bar.add_task("samples", total=samples)
-            ws = armkit.workspace(model, samples,
-                                  progress=lambda done, _: bar.update(task, completed=done),
-                                  **kwargs)
-    else:
-        ws = armkit.workspace(model, samples, **kwargs)
+    with Progress(TextColumn("sampling"), BarColumn(), MofNCompleteColumn(),
+                  TimeRemainingColumn(), console=stderr, transient=True,
+                  disable=samples < PROGRESS_FROM) as bar:
+        task = bar.add_task("samples", total=samples)
+        ws = armkit.workspace(model, samples,
+                              progress=lambda done, _: bar.update(task, completed=done), **kwargs)
     z = default_height(ws) if height is None else float(model.units.length_to_si(height))
     phi = float(model.units.angle_to_si(azimuth))
     figures = save_workspace_figures(ws, out, z, phi, units)
