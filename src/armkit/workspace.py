@@ -177,7 +177,7 @@ class Workspace:
         cells[..., :2] = np.floor(np.multiply.outer(r, [math.cos(azimuth),
                                                         math.sin(azimuth)]) / h)
         cells[..., 2] = np.arange(k0, k1)[:, None]
-        occupied = _member(_keys(cells), _keys(self.voxels))
+        occupied = _member(_keys(*np.moveaxis(cells, -1, 0)), _keys(*self.voxels.T))
         extent = np.array([-r_cells * h, r_cells * h, k0 * h, k1 * h])
         return _section("vertical", azimuth, occupied, extent, h)
 
@@ -293,10 +293,9 @@ class _Partial:
     cloud: tuple            # ((start, positions (k, 3)), ...), the pieces below plan.cloud
 
 
-def _keys(ijk: NDArray) -> NDArray:
-    """Voxel indices (..., 3) packed into int64 keys that sort as (i, j, k) do."""
-    u = ijk.astype(np.int64) + _OFFSET
-    return (u[..., 0] << 2 * _AXIS_BITS) | (u[..., 1] << _AXIS_BITS) | u[..., 2]
+def _keys(i: NDArray, j: NDArray, k: NDArray) -> NDArray:
+    """Voxel indices (int64, one shape) packed into keys that sort as (i, j, k) do."""
+    return ((i + _OFFSET) << 2 * _AXIS_BITS) | ((j + _OFFSET) << _AXIS_BITS) | (k + _OFFSET)
 
 
 def _member(keys: NDArray, sorted_keys: NDArray) -> NDArray:
@@ -317,18 +316,18 @@ def _chunk(plan: _Plan, index: int) -> _Partial:
     size = min(plan.chunk, plan.samples - start)
     q = np.random.default_rng([plan.seed, index]).uniform(plan.lower, plan.upper,
                                                           (size, plan.robot.n))
-    p = np.ascontiguousarray(fk(plan.robot, q)[:, :3, 3])
+    x, y, z = p = np.ascontiguousarray(fk(plan.robot, q)[:, :3, 3].T)     # (3, size)
     del q
-    radial2 = p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1]
-    reach2 = radial2 + p[:, 2] * p[:, 2]
-    tagged = np.sort((_keys(np.floor(p / plan.resolution)) << _INDEX_BITS) | np.arange(size))
+    radial2 = x * x + y * y
+    key = _keys(*np.floor(p / plan.resolution).astype(np.int64))
+    tagged = np.sort((key << _INDEX_BITS) | np.arange(size))
     keys = tagged >> _INDEX_BITS
     starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
     kept = min(size, max(0, plan.cloud - start))
-    return _Partial(p.min(axis=0), p.max(axis=0), float(reach2.max()),
+    return _Partial(p.min(axis=1), p.max(axis=1), float((radial2 + z * z).max()),
                     float(radial2.max()), keys[starts], np.diff(np.r_[starts, size]),
                     (tagged[starts] & _INDEX_MASK) + start,
-                    ((start, p[:kept].copy()),) if kept else ())
+                    ((start, p[:, :kept].T.copy()),) if kept else ())
 
 
 def _merge(a: _Partial, b: _Partial) -> _Partial:
