@@ -18,6 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -362,6 +363,17 @@ def _chunks(plan: _Plan, first: int, stop: int,
     return part
 
 
+def _task(plan: _Plan, first: int, stop: int) -> _Partial:
+    """`_chunks` as a Dask task, with one numba thread: the worker's own threads fill its
+    cores already, and more threads than cores would only wait for each other."""
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)            # for this thread only
+    try:
+        return _chunks(plan, first, stop)
+    finally:
+        numba.set_num_threads(threads)
+
+
 def _client(scheduler: Any):
     """(client, whether we opened it) for a `distributed.Client` or a scheduler address."""
     try:
@@ -397,7 +409,7 @@ def _run_dask(plan: _Plan, client, progress: Callable[[int, int], None] | None) 
         if first is None:
             return []
         stop = min(first + size, plan.chunks)
-        future = client.submit(_chunks, shared, first, stop, pure=False)
+        future = client.submit(_task, shared, first, stop, pure=False)
         samples[future.key] = min(stop * plan.chunk, plan.samples) - first * plan.chunk
         return [future]
 
