@@ -22,3 +22,13 @@ BUILTIN = armkit.robots()
 @pytest.fixture(params=BUILTIN)
 def any_robot(request) -> armkit.Robot:
     return armkit.robot(request.param)
+
+
+@pytest.fixture(scope="session")
+def dask_client():
+    """A two-worker Dask cluster on loopback (separate processes), shared by the tests."""
+    from distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        yield client

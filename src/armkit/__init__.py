@@ -16,6 +16,7 @@ from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
 from armkit.model import Robot, load_robot, robot, robots, save_robot
 from armkit.trajectory import (Trajectory, cubic, jerk_limited, quintic, retime, spline,
                                tool_motion, trapezoidal)
+from armkit.workspace import Section, Workspace, workspace
 
 # Loaded on first use, so that `import armkit` does not pay for pymodbus (about 0.1 s).
 _DRIVES = ("load_register_map", "check_waypoints", "send_waypoints", "DriveClient", "SimDrive")
@@ -35,4 +36,5 @@ __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot",
            "jacobian_analytic", "jacobian_dot", "tool_velocity", "tool_acceleration",
            "singular_values", "manipulability", "min_singular_value", "condition_number",
            "ik", "ik_solutions", "IKResult", "IKSolutions", "Trajectory", "cubic", "quintic",
-           "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", *_DRIVES]
+           "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", "workspace",
+           "Workspace", "Section", *_DRIVES]

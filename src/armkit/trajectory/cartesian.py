@@ -50,7 +50,8 @@ class CartesianPath:
         "ok", "out of reach" (no configuration reaches the next pose), "joint limits", or
         "singularity" (the next pose needs another branch: the arm would jump).
     stop : float
-        Path parameter (0..1) of the first sample not followed; 1.0 on success.
+        Path parameter (0..1) of the last sample followed: 1.0 exactly on success, 0.0 if not
+        even the start was solved.
     mask : str
         The task followed.
     """
@@ -191,4 +192,4 @@ def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: Arra
                                        | (last >= chain.upper - 1e-9)))
             reason = "joint limits" if at_limit else "singularity"
     return CartesianPath(s, poses, q, pe, re, cause == 0, reason,
-                         1.0 if cause == 0 else float(s[followed]), mask_name(mask))
+                         float(s[followed - 1]) if followed else 0.0, mask_name(mask))

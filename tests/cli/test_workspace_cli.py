@@ -1,0 +1,104 @@
+"""`armkit workspace`: numbers in the file's units, figures written, Dask, bad input."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+from typer.testing import CliRunner
+
+import armkit
+import armkit.cli.workspace as command
+from armkit.cli import app
+
+runner = CliRunner()
+
+
+def run(*args: str):
+    return runner.invoke(app, list(args))
+
+
+def test_json_in_millimetres_and_two_figures(tmp_path):
+    result = run("workspace", "water_supply", "-n", "2e4", "--seed", "4", "--resolution", "100",
+                 "--out", str(tmp_path / "figs"), "--json")
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    ws = armkit.workspace(armkit.robot("water_supply"), 20_000, seed=4, resolution=0.1)
+    assert doc["units"] == {"length": "mm", "angle": "deg"} and doc["samples"] == 20_000
+    assert doc["resolution"] == pytest.approx(100)
+    assert doc["bounds"]["lower"] == pytest.approx(ws.lower * 1000)
+    assert doc["bounds"]["upper"] == pytest.approx(ws.upper * 1000)
+    assert 525.5 <= doc["bounds"]["lower"][2] and doc["bounds"]["upper"][2] <= 1125.5
+    assert doc["reach"] == pytest.approx(ws.reach * 1000)
+    assert doc["volume"] == pytest.approx(ws.volume * 1e9)
+    assert doc["volume_history"][-1] == [20_000, pytest.approx(ws.volume * 1e9)]
+    horizontal, vertical = doc["sections"]
+    assert horizontal["height"] == pytest.approx(850)        # middle of the layer 800 .. 900
+    assert horizontal["area"] == pytest.approx(ws.horizontal_section(0.85).area * 1e6)
+    assert vertical["azimuth"] == 0 and vertical["area"] > 0
+    for path in doc["figures"]:
+        with open(path, "rb") as f:
+            assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in (tmp_path / "figs").iterdir()) == [
+        "water_supply_sections.png", "water_supply_workspace.png"]
+
+
+def test_text_and_si(tmp_path):
+    result = run("workspace", "tool_changer_6dof", "-n", "20000", "--out", str(tmp_path),
+                 "--height", "500", "--azimuth", "90")
+    assert result.exit_code == 0, result.output
+    text = result.stdout
+    assert "20,000 samples, seed 0, voxels of 100 mm" in text
+    assert "bounds (mm):  x " in text and "from the base origin" in text
+    assert "volume (mm³):" in text and "sections (mm²):  z = 500:" in text
+    assert "azimuth 90 deg" in text and "tool_changer_6dof_sections.png" in text
+    doc = json.loads(run("workspace", "tool_changer_6dof", "-n", "20000", "--out",
+                         str(tmp_path), "--json", "--si").stdout)
+    assert doc["units"]["length"] == "m" and doc["resolution"] == pytest.approx(0.1)
+    assert doc["bounds"]["upper"][0] <= 2.8
+
+
+def test_long_runs_show_progress_on_stderr_only(tmp_path, monkeypatch):
+    monkeypatch.setattr(command, "PROGRESS_FROM", 1)
+    result = run("workspace", "ur5", "-n", "3000", "--out", str(tmp_path), "--json")
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["samples"] == 3000
+
+
+def test_on_a_dask_cluster_the_numbers_are_the_local_ones(tmp_path, dask_client):
+    args = ["workspace", "inspection_6dof", "-n", "30000", "--out", str(tmp_path), "--json"]
+    local = json.loads(run(*args).stdout)
+    result = run(*args, "--scheduler", dask_client.scheduler.address)
+    assert result.exit_code == 0, result.output
+    remote = json.loads(result.stdout)
+    assert {k: v for k, v in remote.items() if k != "figures"} == {
+        k: v for k, v in local.items() if k != "figures"}
+
+
+@pytest.mark.parametrize("args, words", [
+    (("-n", "0"), "armkit: n: expected at least 1, found 0"),
+    (("-n", "lots"), "armkit: N: expected a whole number such as 1000000 or 1e6, found 'lots'"),
+    (("-n", "2.5"), "armkit: N: expected a whole number"),
+    (("--resolution", "-5"), "armkit: --resolution: expected a positive voxel edge in mm, "
+                             "found -5"),
+    (("--resolution", "0.001"), "armkit: resolution: expected at least 0.000202 m"),
+    (("--scheduler", "nowhere"), "armkit: scheduler: expected a Dask scheduler at nowhere"),
+])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, args, words):
+    result = run("workspace", "inspection_6dof", "--out", str(tmp_path), *args)
+    assert result.exit_code == 2, result.output
+    assert result.stderr.strip().splitlines() == [result.stderr.strip()]
+    assert words in result.stderr and result.stdout == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_real_command(tmp_path):
+    env = {**os.environ, "COLUMNS": "120"}
+    done = subprocess.run([sys.executable, "-m", "armkit", "workspace", "modular_4dof", "-n",
+                           "5000", "--out", str(tmp_path), "--json"], capture_output=True,
+                          text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["robot"] == "modular_4dof"
