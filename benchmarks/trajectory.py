@@ -32,18 +32,9 @@ from scipy.interpolate import CubicSpline, make_interp_spline
 
 from armkit.trajectory import jerk_limited, jerk_limited_profile, retime, spline, waypoint_path
 from armkit.trajectory.spline import _System
+from common import best_of
 
 logging.getLogger("toppra").setLevel(logging.ERROR)
-
-
-def best_of(f, repeat: int) -> float:
-    """Shortest wall time of `repeat` calls (s): the least disturbed by a shared machine."""
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def line(case: str, ours: float, name: str, ref: float, unit: str = "ms", scale: float = 1e3):

@@ -27,7 +27,7 @@ from distributed import Client, LocalCluster
 
 import armkit
 from armkit.workspace import CHUNK, sampling_limits
-from fk import best_of, numpy_chain
+from common import best_of, numpy_chain
 
 ROBOT, RESOLUTION = "inspection_6dof", 0.05
 
