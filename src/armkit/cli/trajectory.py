@@ -30,7 +30,7 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 import typer
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import Field, ValidationError, model_validator
 from rich.table import Table
 
 import armkit
@@ -38,17 +38,16 @@ from armkit import trajectory as tj
 from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
 from armkit.errors import InputError
 from armkit.model import SI, Robot
-from armkit.model.files import read_yaml, validation_error
+from armkit.model.files import StrictModel, read_yaml, validation_error
 from armkit.report.trajectory import patterns_figure, tool_figure
 
 Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
 Limit = float | list[float] | None
 
 
-class CaseFile(BaseModel):
+class CaseFile(StrictModel):
     """A trajectory case as its file (or the command's options) gives it, in file units."""
 
-    model_config = ConfigDict(extra="forbid")
     robot: str
     start: list[float] | None = None
     goal: list[float] | None = None

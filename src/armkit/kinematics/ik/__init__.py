@@ -211,9 +211,10 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         bound = reach_bound(robot)
         starts = numeric.seed_starts(robot, flat_T[idx], mask, bound / 4, count=SEEDS,
                                      samples=min(4096, max(256, 8 * len(idx))), seed=seed)
-        # The closed form's nearest branch, or the given q0, goes first.
-        first = q[idx] if family is not None and method == "auto" else q_ref[idx]
-        if q0 is not None or family is not None:
+        # The closed form's nearest branch (polishing), or else the given q0, goes first.
+        polishing = family is not None and method == "auto"
+        if polishing or q0 is not None:
+            first = q[idx] if polishing else q_ref[idx]
             starts = np.concatenate([first[:, None, :], starts[:, :-1]], axis=1)
         # Beyond the reach bound no start can succeed: one attempt finds the closest pose.
         beyond = (np.linalg.norm(flat_T[idx, :3, 3] - robot.chain.points[0], axis=-1)

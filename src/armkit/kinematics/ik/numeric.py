@@ -190,25 +190,29 @@ def _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
     """
     m, n = A.shape
     if n <= m:                                          # (A^T A + lam I) dq = A^T e
-        scale = 0.0
-        for i in range(n):
+        for i in range(n):                              # lower triangle and right-hand side
             s = 0.0
             for r in range(m):
                 s += A[r, i] * e[r]
-            gn[i] = s if free[i] else 0.0
-            for j in range(i, n):
+            gn[i] = s
+            for j in range(i + 1):
                 s = 0.0
                 for r in range(m):
                     s += A[r, i] * A[r, j]
-                Hn[j, i] = s if free[i] and free[j] else 0.0
+                Hn[i, j] = s
+        scale = 0.0
+        for i in range(n):
             if free[i]:
                 scale = max(scale, Hn[i, i])
-            else:
-                Hn[i, i] = 1.0
         damping = lam * max(scale, 1e-300)
         for i in range(n):
             if free[i]:
                 Hn[i, i] += damping
+            else:                                       # a held joint: dq_i = 0
+                gn[i] = 0.0
+                for j in range(n):
+                    Hn[max(i, j), min(i, j)] = 0.0
+                Hn[i, i] = 1.0
         return _solve_spd(Hn, gn, dq)
     scale = 0.0                                         # dq = A^T (A A^T + lam I)^-1 e
     for c in range(n):
