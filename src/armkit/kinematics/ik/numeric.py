@@ -30,6 +30,7 @@ from scipy.spatial import cKDTree
 
 from armkit.kinematics._kernels import pose_jacobian_one
 from armkit.kinematics.forward import fk
+from armkit.kinematics.ik.task import task_errors_one
 
 _jit = numba.njit(cache=True, nogil=True)
 _pjit = numba.njit(cache=True, nogil=True, parallel=True)
@@ -83,47 +84,6 @@ def _log_rotation(E, out):
         sign = 1.0 if (v0 * sx + v1 * sy + v2 * sz) >= 0.0 else -1.0
         f = sign * angle / norm
         out[0], out[1], out[2] = f * v0, f * v1, f * v2
-
-
-@_jit
-def _angle(ax, ay, az, bx, by, bz):
-    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
-    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
-
-
-@_jit
-def task_errors_one(T, Tt, mask):
-    """Position (m) and rotation (rad) error of T against Tt; the same measures as task.py."""
-    p2 = 0.0
-    for r in range(3):
-        if mask[r]:
-            d = Tt[r, 3] - T[r, 3]
-            p2 += d * d
-    count = mask[3] + mask[4] + mask[5]
-    if count == 0:
-        return math.sqrt(p2), 0.0
-    if count == 3:
-        tr = 0.0
-        sx, sy, sz = 0.0, 0.0, 0.0
-        # E = R^T Rt; its trace and skew part, without forming it.
-        for r in range(3):
-            tr += T[r, 0] * Tt[r, 0] + T[r, 1] * Tt[r, 1] + T[r, 2] * Tt[r, 2]
-            sx += T[r, 2] * Tt[r, 1] - T[r, 1] * Tt[r, 2]
-            sy += T[r, 0] * Tt[r, 2] - T[r, 2] * Tt[r, 0]
-            sz += T[r, 1] * Tt[r, 0] - T[r, 0] * Tt[r, 1]
-        return math.sqrt(p2), math.atan2(0.5 * math.sqrt(sx * sx + sy * sy + sz * sz),
-                                         0.5 * (tr - 1.0))
-    if count == 2:
-        free = 0 if not mask[3] else (1 if not mask[4] else 2)
-        return math.sqrt(p2), _angle(T[0, free], T[1, free], T[2, free],
-                                     Tt[0, free], Tt[1, free], Tt[2, free])
-    k = 0 if mask[3] else (1 if mask[4] else 2)
-    o = (k + 1) % 3
-    kx, ky, kz = T[0, k], T[1, k], T[2, k]
-    da = T[0, o] * kx + T[1, o] * ky + T[2, o] * kz
-    db = Tt[0, o] * kx + Tt[1, o] * ky + Tt[2, o] * kz
-    return math.sqrt(p2), _angle(T[0, o] - da * kx, T[1, o] - da * ky, T[2, o] - da * kz,
-                                 Tt[0, o] - db * kx, Tt[1, o] - db * ky, Tt[2, o] - db * kz)
 
 
 @_jit

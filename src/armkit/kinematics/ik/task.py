@@ -18,10 +18,15 @@ as the target's; roll about it is free).
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
+
+_jit = numba.njit(cache=True, nogil=True)
 
 NAMED_MASKS = {
     "pose": (1, 1, 1, 1, 1, 1),
@@ -54,9 +59,51 @@ def mask_name(mask: NDArray) -> str:
     return "".join(str(int(f)) for f in mask)
 
 
-def _angle_between(a: NDArray, b: NDArray) -> NDArray:
-    """Angle (rad) between vectors (..., 3), accurate near 0 and pi (atan2 of |a x b|, a.b)."""
-    return np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
+@_jit
+def _angle(ax, ay, az, bx, by, bz):
+    cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+    return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
+
+
+@_jit
+def task_errors_one(T, Tt, mask):
+    """Position (m) and rotation (rad) error of one pose T (4, 4) against Tt (4, 4)."""
+    p2 = 0.0
+    for r in range(3):
+        if mask[r]:
+            d = Tt[r, 3] - T[r, 3]
+            p2 += d * d
+    count = mask[3] + mask[4] + mask[5]
+    if count == 0:
+        return math.sqrt(p2), 0.0
+    if count == 3:
+        tr = 0.0
+        sx, sy, sz = 0.0, 0.0, 0.0
+        # E = R^T Rt; its trace and skew part, without forming it.
+        for r in range(3):
+            tr += T[r, 0] * Tt[r, 0] + T[r, 1] * Tt[r, 1] + T[r, 2] * Tt[r, 2]
+            sx += T[r, 2] * Tt[r, 1] - T[r, 1] * Tt[r, 2]
+            sy += T[r, 0] * Tt[r, 2] - T[r, 2] * Tt[r, 0]
+            sz += T[r, 1] * Tt[r, 0] - T[r, 0] * Tt[r, 1]
+        return math.sqrt(p2), math.atan2(0.5 * math.sqrt(sx * sx + sy * sy + sz * sz),
+                                         0.5 * (tr - 1.0))
+    if count == 2:
+        free = 0 if not mask[3] else (1 if not mask[4] else 2)
+        return math.sqrt(p2), _angle(T[0, free], T[1, free], T[2, free],
+                                     Tt[0, free], Tt[1, free], Tt[2, free])
+    k = 0 if mask[3] else (1 if mask[4] else 2)
+    o = (k + 1) % 3
+    kx, ky, kz = T[0, k], T[1, k], T[2, k]
+    da = T[0, o] * kx + T[1, o] * ky + T[2, o] * kz
+    db = Tt[0, o] * kx + Tt[1, o] * ky + Tt[2, o] * kz
+    return math.sqrt(p2), _angle(T[0, o] - da * kx, T[1, o] - da * ky, T[2, o] - da * kz,
+                                 Tt[0, o] - db * kx, Tt[1, o] - db * ky, Tt[2, o] - db * kz)
+
+
+@_jit
+def _errors_batch(T, Tt, mask, position, rotation):
+    for k in range(T.shape[0]):
+        position[k], rotation[k] = task_errors_one(T[k], Tt[k], mask)
 
 
 def task_errors(T: ArrayLike, T_target: ArrayLike, mask: NDArray) -> tuple[NDArray, NDArray]:
@@ -72,26 +119,10 @@ def task_errors(T: ArrayLike, T_target: ArrayLike, mask: NDArray) -> tuple[NDArr
     -------
     position_error, rotation_error : ndarray, shape (...,)
     """
-    T, T_target = np.asarray(T, dtype=float), np.asarray(T_target, dtype=float)
-    dp = (T_target[..., :3, 3] - T[..., :3, 3])[..., mask[:3]]
-    position = np.linalg.norm(dp, axis=-1)
-    R, Rt = T[..., :3, :3], T_target[..., :3, :3]
-    flags = np.flatnonzero(mask[3:])
-    lead = np.broadcast_shapes(R.shape[:-2], Rt.shape[:-2])
-    if flags.size == 3:
-        from armkit.spatial import rotation_angle
-        rotation = rotation_angle(np.swapaxes(R, -1, -2) @ Rt)
-    elif flags.size == 2:
-        free = 3 - flags.sum()                       # the axis not flagged: 0, 1 or 2
-        rotation = _angle_between(R[..., :, free], Rt[..., :, free])
-    elif flags.size == 1:
-        k = flags[0]
-        other = (k + 1) % 3
-        axis = R[..., :, k]
-        a, b = R[..., :, other], Rt[..., :, other]
-        a = a - np.sum(a * axis, axis=-1, keepdims=True) * axis
-        b = b - np.sum(b * axis, axis=-1, keepdims=True) * axis
-        rotation = _angle_between(a, b)
-    else:
-        rotation = np.zeros(lead)
-    return np.broadcast_to(position, lead), np.broadcast_to(rotation, lead)
+    T, T_target = np.broadcast_arrays(np.asarray(T, dtype=float), np.asarray(T_target, dtype=float))
+    lead = T.shape[:-2]
+    flat, flat_target = T.reshape(-1, 4, 4), T_target.reshape(-1, 4, 4)
+    position, rotation = np.empty(flat.shape[0]), np.empty(flat.shape[0])
+    _errors_batch(np.ascontiguousarray(flat), np.ascontiguousarray(flat_target),
+                  np.asarray(mask, dtype=np.int64), position, rotation)
+    return position.reshape(lead), rotation.reshape(lead)
