@@ -190,6 +190,18 @@ def test_just_outside_reach_and_at_the_reach_boundary():
     assert str(result.reason) in ("out of reach", "singular") or str(result.reason).startswith("did not")
 
 
+def test_a_branch_near_the_target_is_polished_by_the_numeric_solver():
+    """Branches within 1e-6 of the target but not within tolerance go to Levenberg-Marquardt.
+    Below double precision (1e-17) nothing can succeed: every target takes that path and
+    fails honestly, its q still as close as arithmetic allows."""
+    robot = ROBOTS["ur5"]
+    T = armkit.fk(robot, random_q(robot, 5, seed=23))
+    result = ik(robot, T, tol_position=1e-17, tol_rotation=1e-17, restarts=2)
+    assert set(result.method) == {"analytic:parallel_wrist+lm"}
+    assert not result.success.any() and all(r != "ok" for r in result.reason)
+    assert np.all(result.position_error < 1e-12) and np.all(result.rotation_error < 1e-12)
+
+
 def test_outside_joint_limits_is_its_own_reason():
     robot = ROBOTS["water_supply"]
     T = armkit.fk(robot, [0.0, 0.3, 0.2, 0.1])

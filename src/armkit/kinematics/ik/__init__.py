@@ -48,7 +48,8 @@ class IKResult:
         "ok", "out of reach", "outside joint limits", "singular", or
         "did not converge in N iterations".
     method : ndarray of str, (...,)
-        The solver that produced q: "analytic:<family>", "lm" or "newton".
+        The solver that produced q: "analytic:<family>", "analytic:<family>+lm" (a closed-form
+        branch polished by Levenberg-Marquardt), "lm" or "newton".
     criterion : str
         How the solution was chosen among several.
     mask : str
@@ -195,7 +196,8 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     q = q_ref.copy()
     iterations = np.zeros(N, dtype=np.int64)
     reason = np.full(N, "ok", dtype=object)
-    solver = np.full(N, method if method in ("lm", "newton") else "lm", dtype=object)
+    numeric_method = method if method in ("lm", "newton") else "lm"
+    solver = np.full(N, numeric_method, dtype=object)
     numeric_targets = np.ones(N, dtype=bool)
     if family is not None and method in ("auto", "analytic"):
         q, found, reason_cf = _closed_form(robot, family, flat_T, q_ref, mask, criterion, weights,
@@ -206,6 +208,7 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         # polished by the numeric solver; "out of reach" and limit failures are final.
         numeric_targets = (~found & (reason_cf == "near")) if method == "auto" else np.zeros(N, bool)
         reason[reason_cf == "near"] = "out of reach"
+        solver[numeric_targets] = f"analytic:{family.name}+lm"
     if numeric_targets.any():
         idx = np.flatnonzero(numeric_targets)
         bound = reach_bound(robot)
@@ -222,7 +225,7 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         for part, tries in ((~beyond, restarts), (beyond, 0)):
             if part.any():
                 q[idx[part]], _, iterations[idx[part]] = numeric.solve(
-                    robot, flat_T[idx[part]], starts[part], mask, solver[idx][0], tol_position,
+                    robot, flat_T[idx[part]], starts[part], mask, numeric_method, tol_position,
                     tol_rotation, max_iter, tries, seed)
     pe, re, reached, inside = _check(robot, flat_T, q, mask, tol_position, tol_rotation)
     success = reached & inside
@@ -242,7 +245,7 @@ def _closed_form(robot, family, T, q_ref, mask, criterion, weights, tol_position
     reason: "ok", "out of reach", "outside joint limits", or "near" (a branch within 1e-6 of
     the target but not within tolerance: left for the numeric solver to polish).
     """
-    N, n = T.shape[0], robot.n
+    N = T.shape[0]
     C = analytic.candidates(robot.chain, family, T)                       # (N, K, n)
     real = np.isfinite(C).all(axis=-1)
     C = fold_into_limits(robot, np.where(real[..., None], C, 0.0), q_ref[:, None, :])
