@@ -216,28 +216,26 @@ def _whole(name: str, value: Any, low: int, high: int | None = None) -> int:
 
 
 def sampling_limits(robot: Robot) -> tuple[NDArray, NDArray]:
-    """The joint ranges `workspace` samples: the limits, with -pi .. pi for endless joints.
+    """The joint ranges `workspace` samples: the limits, one turn for endless joints.
 
     Returns
     -------
     lower, upper : ndarray, shape (n,)
         rad or m. A revolute joint without finite limits (a URDF continuous joint) spans one
-        turn, -pi .. pi, which reaches every pose the joint can.
+        turn (`Chain.sampling_limits`), which reaches every pose the joint can.
 
     Raises
     ------
     InputError
         If a prismatic joint has no finite limits.
     """
-    lower, upper = np.array(robot.lower), np.array(robot.upper)
-    endless = ~(np.isfinite(lower) & np.isfinite(upper))
-    for name, revolute, lo, hi, bad in zip(robot.joint_names, robot.chain.revolute, lower,
-                                           upper, endless):
+    endless = ~(np.isfinite(robot.lower) & np.isfinite(robot.upper))
+    for name, revolute, lo, hi, bad in zip(robot.joint_names, robot.chain.revolute, robot.lower,
+                                           robot.upper, endless):
         if bad and not revolute:
             raise InputError(f"robot: expected finite limits on prismatic joint {name}, "
                              f"found {lo} .. {hi}")
-    lower[endless], upper[endless] = -math.pi, math.pi
-    return lower, upper
+    return robot.chain.sampling_limits
 
 
 def reach_bound(robot: Robot, lower: NDArray, upper: NDArray) -> float:

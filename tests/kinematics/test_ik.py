@@ -202,6 +202,18 @@ def test_a_branch_near_the_target_is_polished_by_the_numeric_solver():
     assert np.all(result.position_error < 1e-12) and np.all(result.rotation_error < 1e-12)
 
 
+@pytest.mark.parametrize("name, wrist", [("ur5", 4), ("inspection_6dof", 4), ("puma560", 4),
+                                         ("stanford", 4)])
+def test_poses_at_a_wrist_singularity_are_solved(name, wrist):
+    """With the wrist's middle joint at zero the solutions form a continuum; the closed form's
+    one branch may not close there, and the numeric solver takes over from it."""
+    robot = ROBOTS[name]
+    Q = random_q(robot, 300, seed=24)
+    Q[:, wrist] = 0.0
+    result = ik(robot, armkit.fk(robot, Q))
+    assert_solved(robot, result, armkit.fk(robot, Q))
+
+
 def test_outside_joint_limits_is_its_own_reason():
     robot = ROBOTS["water_supply"]
     T = armkit.fk(robot, [0.0, 0.3, 0.2, 0.1])

@@ -210,6 +210,20 @@ class Chain:
         """Joint names, in chain order."""
         return tuple(j.name for j in self.joints)
 
+    @property
+    def sampling_limits(self) -> tuple[NDArray, NDArray]:
+        """Ranges to draw joint values from, (n,) each: the limits, where they are finite.
+
+        A revolute joint without finite limits (a URDF continuous joint) spans one turn from
+        its lower limit (or -pi): every pose it can take. A prismatic joint without them
+        spans -1 .. 1 m.
+        """
+        endless = ~(np.isfinite(self.lower) & np.isfinite(self.upper))
+        lower = np.where(np.isfinite(self.lower), self.lower,
+                         np.where(self.revolute, -np.pi, -1.0))
+        upper = np.where(endless, lower + np.where(self.revolute, 2 * np.pi, 2.0), self.upper)
+        return lower, upper
+
 
 @dataclass(frozen=True, eq=False)
 class KernelChain:

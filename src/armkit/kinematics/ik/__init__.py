@@ -36,8 +36,8 @@ class IKResult:
         Within both tolerances under the mask, and within the joint limits.
     q : ndarray, (..., n)
         The chosen solution. On failure the best configuration found: for "outside joint
-        limits" the solution nearest q0, outside the limits; otherwise the one closest to
-        the target.
+        limits" the solution the criterion prefers (nearest q0 by default), outside the
+        limits; otherwise the one closest to the target.
     position_error : ndarray, (...,)
         m, by forward kinematics of q.
     rotation_error : ndarray, (...,)
@@ -46,7 +46,7 @@ class IKResult:
         Numeric iterations (0 for a closed form).
     reason : ndarray of str, (...,)
         "ok", "out of reach", "outside joint limits", "singular", or
-        "did not converge in N iterations".
+        "did not converge in N iterations x M starts".
     method : ndarray of str, (...,)
         The solver that produced q: "analytic:<family>", "analytic:<family>+lm" (a closed-form
         branch polished by Levenberg-Marquardt), "lm" or "newton".
@@ -106,9 +106,8 @@ def reach_bound(robot: Robot) -> float:
 
 def _start(robot: Robot, q0: ArrayLike | None, lead: tuple[int, ...]) -> NDArray:
     if q0 is None:
-        middle = np.where(np.isfinite(robot.lower + robot.upper),
-                          0.5 * (robot.lower + robot.upper), 0.0)
-        return np.broadcast_to(middle, lead + (robot.n,))
+        lower, upper = robot.chain.sampling_limits
+        return np.broadcast_to(0.5 * (lower + upper), lead + (robot.n,))
     q0 = joint_array(robot, q0, "q0")
     try:
         return np.broadcast_to(q0, lead + (robot.n,))
@@ -134,8 +133,9 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     target : array_like, shape (..., 4, 4)
         Tool poses in the base frame (m).
     q0 : array_like, shape (n,) or (..., n), optional
-        Current configuration: the numeric start and the reference of the "nearest" choice;
-        the middle of the limits if omitted.
+        Current configuration: the first numeric start and the reference of the "nearest"
+        choice (the middle of the limits if omitted; the numeric solver then starts from the
+        sampled configurations nearest the target).
     mask : str or 6 flags, optional
         The task (see `armkit.kinematics.ik.task`): "pose", "position", "position+yaw",
         "position+pitch", "position+axis" or flags (x, y, z, rx, ry, rz). Default: the task the
@@ -193,6 +193,10 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
                              f"for the closed form of {robot.name}, found {mask_name(mask)}")
         family = None
     N = flat_T.shape[0]
+    bound = reach_bound(robot)
+    # Past this bound no configuration reaches the target: no search is worth the time.
+    beyond = (np.linalg.norm(flat_T[:, :3, 3] - robot.chain.points[0], axis=-1)
+              > bound * (1 + 1e-9))
     q = q_ref.copy()
     iterations = np.zeros(N, dtype=np.int64)
     reason = np.full(N, "ok", dtype=object)
@@ -204,14 +208,13 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
                                            tol_position, tol_rotation)
         solver[:] = f"analytic:{family.name}"
         reason[:] = reason_cf
-        # Branches that came near but not within tolerance (at a singularity, say) are
-        # polished by the numeric solver; "out of reach" and limit failures are final.
-        numeric_targets = (~found & (reason_cf == "near")) if method == "auto" else np.zeros(N, bool)
-        reason[reason_cf == "near"] = "out of reach"
+        # What the closed form misses short of the reach bound goes to the numeric solver,
+        # from the closest branch: at a singularity (a wrist with axes 4 and 6 aligned) the
+        # solutions form a continuum, and the one branch the closed form picks may not close.
+        numeric_targets = ~found & ~beyond if method == "auto" else np.zeros(N, bool)
         solver[numeric_targets] = f"analytic:{family.name}+lm"
     if numeric_targets.any():
         idx = np.flatnonzero(numeric_targets)
-        bound = reach_bound(robot)
         starts = numeric.seed_starts(robot, flat_T[idx], mask, bound / 4, count=SEEDS,
                                      samples=min(4096, max(256, 8 * len(idx))), seed=seed)
         # The closed form's nearest branch (polishing), or else the given q0, goes first.
@@ -220,9 +223,7 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
             first = q[idx] if polishing else q_ref[idx]
             starts = np.concatenate([first[:, None, :], starts[:, :-1]], axis=1)
         # Beyond the reach bound no start can succeed: one attempt finds the closest pose.
-        beyond = (np.linalg.norm(flat_T[idx, :3, 3] - robot.chain.points[0], axis=-1)
-                  > bound * (1 + 1e-9))
-        for part, tries in ((~beyond, restarts), (beyond, 0)):
+        for part, tries in ((~beyond[idx], restarts), (beyond[idx], 0)):
             if part.any():
                 q[idx[part]], _, iterations[idx[part]] = numeric.solve(
                     robot, flat_T[idx[part]], starts[part], mask, numeric_method, tol_position,
@@ -230,9 +231,16 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     pe, re, reached, inside = _check(robot, flat_T, q, mask, tol_position, tol_rotation)
     success = reached & inside
     if numeric_targets.any():
-        idx = np.flatnonzero(numeric_targets & ~success)
+        failed = numeric_targets & ~success
         reason[numeric_targets & success] = "ok"
-        reason[idx] = _numeric_reasons(robot, flat_T[idx], q[idx], mask, max_iter, restarts)
+        numeric_reason = _numeric_reasons(robot, q[failed], beyond[failed], mask, max_iter,
+                                          restarts)
+        # Where the closed form had a verdict ("out of reach": no branch reaches the pose;
+        # "outside joint limits": the limits refuse it) and the numeric solver agrees by
+        # failing too, the closed form's verdict says more than "singular" or "did not
+        # converge".
+        keep = np.isin(reason[failed], ("out of reach", "outside joint limits"))
+        reason[failed] = np.where(keep, reason[failed], numeric_reason)
     shape = lambda a: a.reshape(lead + a.shape[1:])     # noqa: E731
     return IKResult(shape(success), shape(q), shape(pe), shape(re), shape(iterations),
                     shape(reason.astype(str)), shape(solver.astype(str)), criterion,
@@ -242,8 +250,9 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
 def _closed_form(robot, family, T, q_ref, mask, criterion, weights, tol_position, tol_rotation):
     """Best closed-form solution per target: (q (N, n), found (N,), reason (N,) of str).
 
-    reason: "ok", "out of reach", "outside joint limits", or "near" (a branch within 1e-6 of
-    the target but not within tolerance: left for the numeric solver to polish).
+    reason: "ok", "outside joint limits" (a branch reaches the target, none inside the
+    limits; q is the one the criterion prefers), or "out of reach" (no branch reaches it; q
+    is the closest).
     """
     N = T.shape[0]
     C = analytic.candidates(robot.chain, family, T)                       # (N, K, n)
@@ -252,14 +261,16 @@ def _closed_form(robot, family, T, q_ref, mask, criterion, weights, tol_position
     pe, re, reached, inside = _check(robot, T[:, None], C, mask, tol_position, tol_rotation)
     reached &= real
     usable = reached & inside
-    cost = np.where(usable, scores(robot, C, q_ref, criterion, weights), np.inf)
-    # Without a usable branch, report the closest one (by task error) as the best found.
-    closeness = np.where(real, pe + re, np.inf)
-    pick = np.where(usable.any(axis=1), np.argmin(cost, axis=1), np.argmin(closeness, axis=1))
+    score = scores(robot, C, q_ref, criterion, weights)
+    # The best usable branch; else the best that reaches the target (outside the limits);
+    # else the closest to it.
+    pick = np.select([usable.any(axis=1), reached.any(axis=1)],
+                     [np.argmin(np.where(usable, score, np.inf), axis=1),
+                      np.argmin(np.where(reached, score, np.inf), axis=1)],
+                     np.argmin(np.where(real, pe + re, np.inf), axis=1))
     q = np.where(real.any(axis=1)[:, None], C[np.arange(N), pick], q_ref)
-    near = real & (pe < 1e-6) & (re < 1e-6)
-    reason = np.select([usable.any(axis=1), reached.any(axis=1), near.any(axis=1)],
-                       ["ok", "outside joint limits", "near"], "out of reach")
+    reason = np.select([usable.any(axis=1), reached.any(axis=1)],
+                       ["ok", "outside joint limits"], "out of reach")
     return q, usable.any(axis=1), reason
 
 
@@ -269,23 +280,19 @@ def _task_rank(J: NDArray, rows: NDArray) -> NDArray:
     return np.sum(s > 1e-6 * s[..., :1], axis=-1)
 
 
-def _numeric_reasons(robot, T, q, mask, max_iter, restarts) -> NDArray:
+def _numeric_reasons(robot, q, beyond, mask, max_iter, restarts) -> NDArray:
     """Why numeric solves failed: out of reach, at a singularity, or not converged.
 
     "singular" means the task Jacobian at the best q has lower rank than the arm has in
     general for that task (an arm that never spans the task is not called singular for it).
     """
-    if T.shape[0] == 0:
+    if q.shape[0] == 0:
         return np.array([], dtype=object)
     rows = np.flatnonzero(mask)
-    general = np.random.default_rng(0).uniform(np.where(np.isfinite(robot.lower), robot.lower, -1),
-                                               np.where(np.isfinite(robot.upper), robot.upper, 1),
-                                               (8, robot.n))
+    general = np.random.default_rng(0).uniform(*robot.chain.sampling_limits, (8, robot.n))
     generic = _task_rank(pose_and_jacobian(robot, general)[1], rows).max()
     rank = _task_rank(pose_and_jacobian(robot, q)[1], rows)
-    distance = np.linalg.norm(T[:, :3, 3] - robot.chain.points[0], axis=-1)
-    return np.select([distance > reach_bound(robot) * (1 + 1e-9), rank < generic],
-                     ["out of reach", "singular"],
+    return np.select([beyond, rank < generic], ["out of reach", "singular"],
                      f"did not converge in {max_iter} iterations x {restarts + 1} starts")
 
 

@@ -73,10 +73,13 @@ def _perp(w, v):
 def sp1(w, u, v):
     """Paden-Kahan 1: theta with ``Rot(w, theta) u = v`` (vectors relative to the axis).
 
-    Uses the parts of u and v normal to w; where those vanish any theta works and 0 is given.
+    Uses the parts of u and v normal to w; where either vanishes (to 1e-9 of |u|) any theta
+    works and 0 is given, rather than the angle of two round-off vectors.
     """
     a, b = _perp(w, u), _perp(w, v)
-    return np.arctan2(_dot(w, _cross(a, b)), _dot(a, b))
+    scale = 1e-9 * np.maximum(np.sqrt(_dot(u, u)), 1e-300)
+    degenerate = (np.sqrt(_dot(a, a)) < scale) | (np.sqrt(_dot(b, b)) < scale)
+    return np.where(degenerate, 0.0, np.arctan2(_dot(w, _cross(a, b)), _dot(a, b)))
 
 
 def sp3(w, u, v, delta):
@@ -370,7 +373,7 @@ def family_of(chain: Chain) -> Family | None:
 
 
 def candidates(chain: Chain, family: Family, targets: NDArray) -> NDArray:
-    """Every branch of the family's closed form, (N, K, n), angles in (-pi, pi]; NaN where a
+    """Every branch of the family's closed form, (N, K, n), angles in [-pi, pi); NaN where a
     branch has no real solution."""
     with np.errstate(invalid="ignore", divide="ignore"):
         q = family.solve(chain, targets)

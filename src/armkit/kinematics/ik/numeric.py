@@ -368,9 +368,7 @@ def solve(robot, targets: np.ndarray, starts: np.ndarray, mask: np.ndarray, meth
     lower, upper = chain.lower, chain.upper
     # A revolute joint whose range is a full turn or more wraps instead of stopping.
     turn = chain.revolute & (upper - lower >= 2 * np.pi - 1e-12)
-    # Where a limit is infinite (a continuous joint) restarts draw from one turn.
-    sample_lo = np.where(np.isfinite(lower), lower, -np.pi)
-    sample_hi = np.where(np.isfinite(upper), np.minimum(upper, sample_lo + 2 * np.pi), np.pi)
+    sample_lo, sample_hi = chain.sampling_limits
     lower_w = np.where(turn & ~np.isfinite(lower), -np.pi, lower)
     N = targets.shape[0]
     q = np.empty((N, robot.n))
@@ -416,11 +414,8 @@ def seed_starts(robot, targets: np.ndarray, mask: np.ndarray, length: float, cou
     all the features, and the start it gives is as good. The draw and its forward kinematics are paid
     once per batch; a start near the target turns most solves into a few Gauss-Newton steps.
     """
-    chain = robot.chain
-    lo = np.where(np.isfinite(chain.lower), chain.lower, -np.pi)
-    hi = np.where(np.isfinite(chain.upper), np.minimum(chain.upper, lo + 2 * np.pi), np.pi)
     rng = np.random.default_rng([seed, 0x5EED])
-    Q = rng.uniform(lo, hi, (samples, robot.n))
+    Q = rng.uniform(*robot.chain.sampling_limits, (samples, robot.n))
     T = fk(robot, Q)
     N = targets.shape[0]
     wanted = _features(targets, mask, length)
