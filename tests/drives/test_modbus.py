@@ -113,7 +113,8 @@ FAULTS = [
     ("fault", {}, "drive fault (state 0x8001, fault code 0x2310)", 2, False),
     ("ignore", {}, "not acknowledged within 0.2 s: the drive's waypoint index stayed at 3", 2,
      True),
-    ("corrupt", {}, "read-back mismatch at register 0 (joint q1)", 2, False),
+    # The drive took the corrupt write (its index advanced): waypoint 3 was accepted, wrong.
+    ("corrupt", {}, "read-back mismatch at register 0 (joint q1)", 3, False),
     ("drop", {}, "connection lost", 2, True),
     ("drop", {"apply": True}, "connection lost", 2, True),
     ("silence", {}, f"no response within {TIMEOUT:g} s x 1 attempt", 2, True),
@@ -135,12 +136,45 @@ def test_each_fault_reports_the_last_accepted_waypoint(inspection_map, kind, key
     e = err.value
     assert (e.waypoint, e.last_accepted, e.outcome_unknown) == (3, last, unknown)
     assert e.cause.startswith(cause), e.cause
+    if kind == "corrupt":
+        assert e.cause.endswith("(and the drive took the waypoint with it)")
     assert f"(last accepted waypoint: {last}" in str(e)
     # The drive took waypoints 0..2 whole; after a drop it may also have taken 3, which the
     # client cannot know (outcome unknown); a corrupt write is taken with its wrong register.
     took_fourth = kind == "corrupt" or keywords.get("apply", False)
     assert len(taken) == 3 + took_fourth
     assert taken[:3] == blocks[:3, :-1].tolist()
+
+
+def test_single_writes_count_from_the_connection(inspection_map):
+    q = waypoints(inspection_map, 5)
+    with SimDrive(inspection_map) as sim:
+        sim.inject("fault", at=3)
+        with DriveClient(inspection_map, port=sim.port, timeout=TIMEOUT) as drive:
+            for k in range(3):
+                drive.write_waypoint(q[k])
+            with pytest.raises(DriveError) as err:
+                drive.write_waypoint(q[3])
+    assert (err.value.waypoint, err.value.last_accepted) == (3, 2)
+
+
+def test_a_drive_moves_only_to_waypoints_it_took(inspection_map):
+    q = waypoints(inspection_map, 3)
+    with SimDrive(inspection_map) as sim:
+        sim.inject("ignore", at=1)
+        with pytest.raises(DriveError):
+            send_waypoints(inspection_map, q, port=sim.port, timeout=TIMEOUT, ack_timeout=0.2)
+        np.testing.assert_allclose(sim.targets(), q[1], atol=1e-3)   # written, not taken
+        assert len(sim.taken) == 1
+        np.testing.assert_allclose(sim.goal, q[0], atol=1e-3)
+
+
+@pytest.mark.parametrize("port", [-1, 65536, 70000])
+def test_ports_outside_the_tcp_range_are_refused(inspection_map, port):
+    with pytest.raises(InputError, match=f"port: expected 0..65535, found {port}"):
+        DriveClient(inspection_map, port=port)
+    with pytest.raises(InputError, match="port: expected 0..65535"):
+        SimDrive(inspection_map, port=port)
 
 
 def test_retries_resend_the_same_write(inspection_map):

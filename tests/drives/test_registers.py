@@ -66,7 +66,7 @@ def test_round_trip_within_half_a_count(kind, word, byte, fractions):
         sent = (value * joint.scale).astype(np.float32)
         np.testing.assert_array_equal(back, sent.astype(float) / joint.scale)
     else:
-        assert np.all(np.abs(back - value) * joint.scale <= 0.5)
+        assert np.all(np.abs(back - value) * joint.scale <= 0.5 + 1e-9)   # a tie may round away
 
 
 def test_map_encodes_batches_like_single_waypoints(any_map):

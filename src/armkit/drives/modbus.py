@@ -43,6 +43,19 @@ from armkit.model import joint_array
 ACK_POLL = 0.001   # s
 
 
+def port_number(port: int) -> int:
+    """A TCP port, 0..65535 (0: any free port, for a server).
+
+    Raises
+    ------
+    InputError
+        Otherwise: the operating system would take a larger number modulo 65536.
+    """
+    if not (isinstance(port, (int, np.integer)) and 0 <= port <= 65535):
+        raise InputError(f"port: expected 0..65535, found {port!r}")
+    return int(port)
+
+
 @dataclass(frozen=True)
 class SendResult:
     """A sequence the drive took whole.
@@ -222,7 +235,7 @@ class DriveClient:
         if not (timeout > 0 and ack_timeout > 0 and retries >= 0):
             raise InputError(f"drive client: expected timeout > 0, ack_timeout > 0 and "
                              f"retries >= 0, found {timeout}, {ack_timeout} and {retries}")
-        self.map, self.host, self.port = register_map, host, int(port)
+        self.map, self.host, self.port = register_map, host, port_number(port)
         self.timeout, self.retries, self.ack_timeout = timeout, int(retries), ack_timeout
         self._client = _TcpClient(host, port=self.port, timeout=timeout, retries=self.retries)
         self._index: int | None = None     # the drive's waypoint index last written or read
@@ -367,12 +380,14 @@ class DriveClient:
         Raises
         ------
         InputError, DriveError
-            As `send`, the waypoint counted as 0.
+            As `send`, the single waypoints counted from 0 since the connection was made.
         """
         block = self._encode(check_waypoints(self.map, q)[0])
         if self._index is None:
             self._start()
-        return self._write(0, block)
+        index = self._write(self._singles, block)
+        self._singles += 1
+        return index
 
     def _encode(self, q: NDArray) -> list:
         """Checked waypoints (..., n), SI, as register lists."""
@@ -393,6 +408,7 @@ class DriveClient:
                 raise _Failed(f"drive in fault before the first waypoint "
                               f"({self._fault_text(status)})", False)
             self._index = status.accepted or 0
+            self._singles = 0
             if m.enable is not None:
                 self._request("write_register", m.enable, 1)
         except _Failed as failed:
@@ -442,9 +458,12 @@ class DriveClient:
                     held = values[m.block_start + offset]
                     if held != wrote:
                         address = m.block_start + offset
+                        took = (" (and the drive took the waypoint with it)"
+                                if taken and m.accepted is not None else "")
                         raise _Failed(f"read-back mismatch at register {address} "
                                       f"({m.joint_at(address)}): wrote {wrote:#06x}, the "
-                                      f"drive holds {held:#06x}", False)
+                                      f"drive holds {held:#06x}{took}", False,
+                                      taken=taken and m.accepted is not None)
             if taken:
                 return
             if status.accepted != self._index:

@@ -41,6 +41,7 @@ from pymodbus.constants import ExcCodes
 from pymodbus.server import ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
+from armkit.drives.modbus import port_number
 from armkit.drives.registers import RegisterMap
 from armkit.errors import DriveError, InputError
 
@@ -81,7 +82,7 @@ class SimDrive:
     """
 
     def __init__(self, register_map: RegisterMap, host: str = "127.0.0.1", port: int = 0):
-        self.map, self.host, self.port = register_map, host, int(port)
+        self.map, self.host, self.port = register_map, host, port_number(port)
         m, robot = register_map, register_map.robot
         addresses = [a for j in m.joints for a in (j.target, j.actual) if a is not None]
         addresses += [j.actual + j.count - 1 for j in m.joints if j.actual is not None]
@@ -100,7 +101,6 @@ class SimDrive:
         self._fault_code = 0
         self._silent = self._refusing = False
         self._registers: list[int] | None = None
-        self._targets_written = False
         self._moved_at = time.monotonic()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -131,6 +131,11 @@ class SimDrive:
         return self.map.decode(block)
 
     @property
+    def goal(self) -> NDArray:
+        """The waypoint the joints move to, (n,), rad and m: the last one taken."""
+        return self.map.robot.q_to_si(self._target)
+
+    @property
     def writes(self) -> list[tuple[int, int]]:
         """(address, count) of every write request received."""
         return [(a, n) for fc, a, n in self.requests if fc in WRITES]
@@ -142,9 +147,6 @@ class SimDrive:
         m = self.map
         now = time.monotonic()
         dt, self._moved_at = now - self._moved_at, now
-        if self._targets_written:
-            self._target = m.decode_file(regs[self._slice(m.block_start, m.block_count)])
-            self._targets_written = False
         if self._enabled(regs) and not self._fault_code:
             gap = self._target - self._position
             if gap.any():
@@ -175,8 +177,10 @@ class SimDrive:
             regs[m.fault - self._first] = self._fault_code
 
     def _take(self, regs: list[int], values: list[int]) -> None:
+        """Take a waypoint block: it becomes the target the joints move to."""
         m = self.map
         self.taken.append(list(values))
+        self._target = m.decode_file(values)
         if m.waypoint is not None:
             regs[m.accepted - self._first] = values[m.waypoint - m.block_start]
 
@@ -193,7 +197,6 @@ class SimDrive:
             return await self._hold()
         if values is None:
             return None
-        self._targets_written = True
         if (address, count) != (self.map.block_start, self.map.block_count):
             return None
         return await self._waypoint(regs, values)
