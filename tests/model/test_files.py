@@ -137,3 +137,40 @@ def test_screw_file_mistakes(tmp_path, joint, field, words):
 def test_unknown_builtin_name_suggests_one():
     with pytest.raises(InputError, match=r"found 'ur6' \(did you mean 'ur5'\?\)"):
         armkit.robot("ur6")
+
+
+@pytest.mark.parametrize("text, words", [
+    (GOOD.replace("a: 300", "a: .nan"), "joints[1].a: expected a finite number"),
+    (GOOD.replace("d: 100", "d: .inf"), "joints[0].d: expected a finite number"),
+    ("? [a, b]\n: 1\n", "expected valid YAML, found a key that is a list"),
+])
+def test_non_finite_numbers_and_odd_keys(tmp_path, text, words):
+    with pytest.raises(ModelFileError) as err:
+        load_robot(write(tmp_path, text))
+    assert words in str(err.value), str(err.value)
+
+
+def test_a_file_that_is_not_utf8(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_bytes(GOOD.encode() + b"\xff\xfe")
+    with pytest.raises(ModelFileError, match="bad.yaml: expected a UTF-8 text file, found byte 0xff"):
+        load_robot(path)
+
+
+def test_unnamed_joints_are_numbered_among_the_moving_ones(tmp_path):
+    text = GOOD.split("joints:")[0] + ("joints:\n  - {type: fixed, alpha: 0, a: 0, d: 1, theta: 0}\n"
+                                       "  - {type: revolute, alpha: 0, a: 1, d: 0, theta: 0}\n"
+                                       "  - {type: revolute, alpha: 0, a: 1, d: 0, theta: 0}\n")
+    robot = load_robot(write(tmp_path, text))
+    assert robot.joint_names == ("q1", "q2")
+    again = tmp_path / "again.yaml"
+    save_robot(robot, again)
+    assert load_robot(again).joint_names == ("q1", "q2")
+
+
+def test_robot_tables_are_read_only(any_robot):
+    table = any_robot.table
+    for name in ("T_base", "T_tool", "T_home"):
+        if hasattr(table, name):
+            with pytest.raises(ValueError):
+                getattr(table, name)[0, 3] = 9.0

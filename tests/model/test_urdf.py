@@ -55,7 +55,9 @@ def test_unknown_tip(tree):
     ('type="prismatic"', 'type="floating"', "type: expected revolute or continuous or prismatic"),
     ('<limit lower="0" upper="0.5"', '<limit upper="0.5"', "<limit>: expected lower and upper"),
     ('<limit lower="0" upper="0.5"', '<limit lower="0.6" upper="0.5"', "lower < upper"),
-    ('xyz="0.1 0 0"', 'xyz="0.1 0"', "<origin> xyz: expected 3 numbers"),
+    ('xyz="0.1 0 0"', 'xyz="0.1 0"', "<origin> xyz: expected 3 finite numbers"),
+    ('xyz="0.1 0 0"', 'xyz="0.1 0 nan"', "<origin> xyz: expected 3 finite numbers"),
+    ('velocity="0.2"', 'velocity="fast"', "<limit> velocity: expected a number, found 'fast'"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 zero"/>', "<axis> xyz: expected numbers"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="yaw"/>', "expected independent"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>', "<axis> xyz: expected a non-zero direction"),
@@ -78,7 +80,8 @@ def test_yaml_wrapper_adds_units_and_tool(tree, tmp_path):
     robot = armkit.load_robot(wrapper)
     assert robot.units.length == "mm"
     np.testing.assert_allclose(armkit.fk(robot, [0, 0])[:3, 3], [0.15, 0, 0.32], atol=1e-15)
-    again = tmp_path / "again.yaml"
+    again = tmp_path / "elsewhere" / "again.yaml"        # the URDF path follows the new file
+    again.parent.mkdir()
     armkit.save_robot(robot, again)
     np.testing.assert_allclose(armkit.fk(armkit.load_robot(again), [0.3, 0.1]),
                                armkit.fk(robot, [0.3, 0.1]), atol=1e-15)

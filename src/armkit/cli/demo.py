@@ -9,7 +9,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
+from armkit.cli.app import EXIT_FAILED, JsonFlag, app, output_folder, print_json, stdout
 from armkit.spatial import matrix_to_rpy
 from armkit.task import run_demo
 
@@ -23,7 +23,7 @@ def _pose(T: np.ndarray, units) -> tuple[np.ndarray, float]:
 def demo(out: Annotated[Path, typer.Option(help="Folder for the figures.")] = Path("armkit-out"),
          as_json: JsonFlag = False) -> None:
     """Run the end-to-end job on the built-in water-supply robot and task."""
-    report = run_demo(out)
+    report = run_demo(output_folder(out))
     robot, u = report.robot, report.robot.units
     seen, seen_yaw = _pose(report.task.target_in_camera, u)
     target, target_yaw = _pose(report.T_base_target, u)

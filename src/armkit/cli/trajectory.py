@@ -35,11 +35,10 @@ from rich.table import Table
 
 import armkit
 from armkit import trajectory as tj
-from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
+from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, output_folder, print_json, stdout
 from armkit.errors import InputError
 from armkit.model import SI, Robot
 from armkit.model.files import StrictModel, read_yaml, validation_error
-from armkit.report.trajectory import patterns_figure, tool_figure
 
 Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
 Limit = float | list[float] | None
@@ -234,13 +233,13 @@ def traj(
                  "acceleration": _numbers("acceleration", acceleration),
                  "jerk": _numbers("jerk", jerk)}
     spec = load_case(case, overrides)
+    out = output_folder(out)
     robot = armkit.robot(spec.robot)
     trajectories, moving = build(spec, robot)
     table = tj.compare(trajectories)
     units = SI if si else robot.units
     stem = Path(case).stem if _is_case_file(case) else f"{robot.name}_traj"
-    figures = _figures(robot, trajectories, moving, Path(out), stem,
-                       via=spec.times is not None)
+    figures = _figures(robot, trajectories, moving, out, stem, via=spec.times is not None)
     results = [{"label": label, "duration": s.duration, "knots": trajectories[label].knots,
                 "joints": _rows(robot, trajectories[label], s, moving, units)}
                for label, s in table.items()]
@@ -254,7 +253,9 @@ def traj(
 
 def _figures(robot: Robot, trajectories: dict, moving: list[int], out: Path, stem: str,
              via: bool) -> list[Path]:
-    out.mkdir(parents=True, exist_ok=True)
+    # Here, not at the top: matplotlib would slow down every other command's start.
+    from armkit.report.trajectory import patterns_figure, tool_figure
+
     shown = moving or list(range(robot.n))
     title = (f"{robot.name}: joint{'s' if len(shown) > 1 else ''} "
              + ", ".join(str(j + 1) for j in shown) +

@@ -10,7 +10,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 import armkit
-from armkit.cli.app import JsonFlag, SiFlag, app, print_json, stderr, stdout
+from armkit.cli.app import JsonFlag, SiFlag, app, output_folder, print_json, stderr, stdout
 from armkit.cli.robots import RobotArg
 from armkit.errors import InputError
 from armkit.model import SI
@@ -57,6 +57,7 @@ def workspace(robot: RobotArg,
     model = armkit.robot(robot)
     units = SI if si else model.units
     samples = _count(n)
+    out = output_folder(out)
     kwargs = dict(seed=seed, scheduler=scheduler)
     if resolution is not None:
         if not (math.isfinite(resolution) and resolution > 0):

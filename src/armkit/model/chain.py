@@ -34,6 +34,14 @@ def _frozen(a: ArrayLike) -> NDArray:
     return a
 
 
+def freeze(record, *names: str) -> None:
+    """Make the named array fields of a frozen dataclass read-only float copies (None stays)."""
+    for name in names:
+        value = getattr(record, name)
+        if value is not None:
+            object.__setattr__(record, name, _frozen(value))
+
+
 @dataclass(frozen=True)
 class Limits:
     """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2).
@@ -95,15 +103,17 @@ class Joint:
 
 
 def _rotation_onto_z(axis: NDArray) -> NDArray:
-    """A 4x4 rotation R with ``R @ e_z = axis`` (for a unit axis)."""
-    z = np.array([0.0, 0.0, 1.0])
-    v, c = np.cross(z, axis), float(z @ axis)
+    """A 4x4 rotation R with ``R @ e_z = axis`` (for a unit axis); identity for e_z itself.
+
+    Built from the axis and the basis vector least aligned with it (cross products), which
+    stays orthonormal to rounding for every axis, -z and its neighbours included.
+    """
     R = np.eye(4)
-    if c < -1.0 + 1e-12:                       # axis = -z: half turn about x
-        R[:3, :3] = np.diag([1.0, -1.0, -1.0])
-    else:                                      # Rodrigues for the shortest arc
-        K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-        R[:3, :3] = np.eye(3) + K + K @ K / (1.0 + c)
+    if np.array_equal(axis, [0.0, 0.0, 1.0]):
+        return R
+    x = np.cross(np.eye(3)[np.argmin(np.abs(axis))], axis)
+    x /= np.linalg.norm(x)
+    R[:3, :3] = np.column_stack([x, np.cross(axis, x), axis])
     return R
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import InputError
-from armkit.model.chain import Chain, Joint, Limits
+from armkit.model.chain import Chain, Joint, Limits, freeze
 from armkit.spatial import rotx, rotz, transform
 
 _Z = np.array([0.0, 0.0, 1.0])
@@ -49,6 +49,10 @@ class DHTable:
     modified: bool = False
     T_base: NDArray = field(default_factory=lambda: np.eye(4))
     T_tool: NDArray = field(default_factory=lambda: np.eye(4))
+
+    def __post_init__(self):
+        object.__setattr__(self, "rows", tuple(self.rows))
+        freeze(self, "T_base", "T_tool")
 
 
 def _tz(d: float) -> NDArray:

@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import difflib
 import math
+import os
+from collections.abc import Hashable
 from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal, get_args
@@ -41,9 +43,10 @@ Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 
 
 class StrictModel(BaseModel):
-    """Base of armkit's file models: an unknown field is a mistake, not something to ignore."""
+    """Base of armkit's file models: an unknown field is a mistake, not something to ignore,
+    and so is NaN or inf (``.nan``, ``.inf`` in YAML) where a number is expected."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class PoseField(StrictModel):
@@ -137,6 +140,9 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         seen = set()
         for key_node, _ in node.value:
             key = self.construct_object(key_node, deep=deep)
+            if not isinstance(key, Hashable):
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"a key that is a {type(key).__name__}", key_node.start_mark)
             if key in seen:
                 raise yaml.constructor.ConstructorError(
                     None, None, f"key {key!r} given twice", key_node.start_mark)
@@ -150,6 +156,9 @@ def read_yaml(path: str | Path) -> Any:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as err:
         raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
+    except UnicodeDecodeError as err:
+        raise ModelFileError(str(path), "", "a UTF-8 text file",
+                             f"byte {err.object[err.start]:#04x} at offset {err.start}") from None
     try:
         return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
     except yaml.YAMLError as err:
@@ -235,14 +244,14 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
     T_base, T_tool = _pose(spec.base, units), _pose(spec.tool, units)
     if isinstance(spec, URDFFile):
         found = read_urdf(Path(path).parent / spec.urdf, spec.tip)
-        table = URDFTable(spec.urdf, found.tip, found.joints, T_base, T_tool)
+        table = URDFTable(found.path, found.tip, found.joints, T_base, T_tool)
         chain = chain_from_urdf(table)
     elif isinstance(spec, ScrewFile):
         rows = tuple(_screw_row(j, i, units) for i, j in enumerate(spec.joints))
         table = ScrewTable(rows, _pose(spec.home, units), T_base, T_tool)
         chain = chain_from_poe(table)
     else:
-        rows = tuple(_dh_row(j, i, units) for i, j in enumerate(spec.joints))
+        rows = tuple(_dh_row(j, units) for j in spec.joints)
         if all(r.kind == "fixed" for r in rows):
             raise ModelFileError(path, "joints", "at least one revolute or prismatic joint",
                                  "only fixed rows")
@@ -269,10 +278,11 @@ def _limits(joint: _JointField, kind: str, units: Units) -> Limits | None:
     return Limits(lower, upper, velocity, acceleration)
 
 
-def _dh_row(joint: DHJointField, i: int, units: Units) -> DHRow:
+def _dh_row(joint: DHJointField, units: Units) -> DHRow:
+    """A file row in SI; an unnamed row stays unnamed (the chain numbers moving joints)."""
     return DHRow(joint.type, float(units.angle_to_si(joint.alpha)),
                  float(units.length_to_si(joint.a)), float(units.length_to_si(joint.d)),
-                 float(units.angle_to_si(joint.theta)), joint.name or f"q{i + 1}",
+                 float(units.angle_to_si(joint.theta)), joint.name or "",
                  _limits(joint, joint.type, units))
 
 
@@ -299,8 +309,9 @@ def load_robot(path: str | Path) -> Robot:
 # --- writing ---------------------------------------------------------------------------------
 
 def _num(x: float) -> float:
-    """A file value without the last-bit noise of the unit conversion (12 significant digits)."""
-    return float(f"{float(x):.12g}")
+    """A file value without the last-bit noise of the unit conversion (15 significant digits:
+    525.5000000000001 is written 525.5, and nothing a double holds of a file value is lost)."""
+    return float(f"{float(x):.15g}")
 
 
 def _nums(xs) -> list[float]:
@@ -324,8 +335,10 @@ def _limits_doc(limits: Limits | None, kind: str, units: Units) -> dict:
     return doc
 
 
-def robot_document(robot: Robot) -> dict:
+def robot_document(robot: Robot, folder: str | Path | None = None) -> dict:
     """The robot as a robot-file document (a dict in the robot's units), ready for YAML.
+
+    ``folder``: where the document will be written; a URDF path is then given relative to it.
 
     Raises
     ------
@@ -342,7 +355,8 @@ def robot_document(robot: Robot) -> dict:
     elif isinstance(table, ScrewTable):
         doc["convention"] = "poe"
     elif isinstance(table, URDFTable):
-        doc.update(convention="urdf", urdf=table.path, tip=table.tip)
+        urdf = table.path if folder is None else os.path.relpath(table.path, folder)
+        doc.update(convention="urdf", urdf=urdf, tip=table.tip)
     else:
         raise InputError(f"robot {robot.name}: expected one built from a DH, screw or URDF "
                          f"table, found table {type(table).__name__}")
@@ -350,7 +364,7 @@ def robot_document(robot: Robot) -> dict:
         if not np.allclose(T, np.eye(4), atol=1e-15):
             doc[key] = _pose_doc(T, u)
     if isinstance(table, DHTable):
-        doc["joints"] = [{"name": r.name, "type": r.kind,
+        doc["joints"] = [{**({"name": r.name} if r.name else {}), "type": r.kind,
                           "alpha": _num(u.angle_from_si(r.alpha)),
                           "a": _num(u.length_from_si(r.a)), "d": _num(u.length_from_si(r.d)),
                           "theta": _num(u.angle_from_si(r.theta)),
@@ -366,7 +380,8 @@ def robot_document(robot: Robot) -> dict:
 
 def save_robot(robot: Robot, path: str | Path) -> None:
     """Write the robot as a YAML robot file that `load_robot` reads back to the same robot."""
-    text = yaml.safe_dump(robot_document(robot), sort_keys=False, default_flow_style=None)
+    text = yaml.safe_dump(robot_document(robot, Path(path).parent), sort_keys=False,
+                          default_flow_style=None)
     Path(path).write_text(text, encoding="utf-8")
 
 

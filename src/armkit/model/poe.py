@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import InputError
-from armkit.model.chain import Chain, Joint, Limits
+from armkit.model.chain import Chain, Joint, Limits, freeze
 from armkit.spatial import invert, translation
 
 
@@ -35,6 +35,9 @@ class ScrewRow:
     point: NDArray | None = None
     name: str = ""
 
+    def __post_init__(self):
+        freeze(self, "axis", "point")
+
 
 @dataclass(frozen=True)
 class ScrewTable:
@@ -45,17 +48,9 @@ class ScrewTable:
     T_base: NDArray = field(default_factory=lambda: np.eye(4))
     T_tool: NDArray = field(default_factory=lambda: np.eye(4))
 
-
-def screw_axes(table: ScrewTable) -> NDArray:
-    """The space-frame screws ``(v, w)`` of the table, shape (n, 6)."""
-    S = np.zeros((len(table.rows), 6))
-    for i, row in enumerate(table.rows):
-        axis = np.asarray(row.axis, dtype=float) / np.linalg.norm(row.axis)
-        if row.kind == "revolute":
-            S[i] = np.r_[-np.cross(axis, row.point), axis]
-        else:
-            S[i, :3] = axis
-    return S
+    def __post_init__(self):
+        object.__setattr__(self, "rows", tuple(self.rows))
+        freeze(self, "T_home", "T_base", "T_tool")
 
 
 def chain_from_poe(table: ScrewTable) -> Chain:

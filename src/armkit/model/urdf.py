@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import ModelFileError
-from armkit.model.chain import Chain, Joint, Limits
+from armkit.model.chain import Chain, Joint, Limits, freeze
 from armkit.spatial import pose_from_xyz_rpy
 
 SUPPORTED = ("revolute", "continuous", "prismatic", "fixed")
@@ -46,6 +46,9 @@ class URDFTable:
     T_base: NDArray = field(default_factory=lambda: np.eye(4))
     T_tool: NDArray = field(default_factory=lambda: np.eye(4))
 
+    def __post_init__(self):
+        freeze(self, "T_base", "T_tool")
+
 
 def _floats(element: ET.Element | None, attribute: str, default: str, path: str,
             where: str) -> NDArray:
@@ -54,8 +57,9 @@ def _floats(element: ET.Element | None, attribute: str, default: str, path: str,
         values = np.array([float(v) for v in text.split()])
     except ValueError:
         raise ModelFileError(path, f"{where} {attribute}", "numbers", repr(text)) from None
-    if values.shape != (3,):
-        raise ModelFileError(path, f"{where} {attribute}", "3 numbers", repr(text))
+    if values.shape != (3,) or not np.isfinite(values).all():
+        raise ModelFileError(path, f"{where} {attribute}", "3 finite numbers", repr(text))
+    values.setflags(write=False)
     return values
 
 
@@ -63,7 +67,12 @@ def _limits(element: ET.Element, kind: str, path: str, where: str) -> Limits | N
     if kind == "fixed":
         return None
     limit = element.find("limit")
-    velocity = float(limit.get("velocity", "inf")) if limit is not None else np.inf
+    text = limit.get("velocity", "inf") if limit is not None else "inf"
+    try:
+        velocity = float(text)
+    except ValueError:
+        raise ModelFileError(path, f"{where} <limit> velocity", "a number",
+                             repr(text)) from None
     velocity = velocity if velocity > 0 else np.inf
     if kind == "continuous":
         return Limits(-np.inf, np.inf, velocity)
