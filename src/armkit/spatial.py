@@ -55,9 +55,12 @@ def as_transform(T: ArrayLike, name: str = "T", tol: float = 1e-6) -> NDArray:
     T = as_array(T, name, (4, 4))
     R = T[..., :3, :3]
     off = np.abs(R @ np.swapaxes(R, -1, -2) - np.eye(3)).max(initial=0.0)
-    if off > tol or np.any(np.linalg.det(R) < 0):
+    if off > tol:
         raise InputError(f"{name}: expected a rotation part that is orthonormal with det +1, "
                          f"found one off by {off:.3g}")
+    if np.any(np.linalg.det(R) < 0):
+        raise InputError(f"{name}: expected a rotation part with det +1, found a reflection "
+                         f"(det -1)")
     if np.abs(T[..., 3, :] - (0.0, 0.0, 0.0, 1.0)).max(initial=0.0) > tol:
         raise InputError(f"{name}: expected last row (0, 0, 0, 1), found another")
     return T
@@ -161,8 +164,8 @@ def rpy_to_matrix(rpy: ArrayLike, *, degrees: bool = False) -> NDArray:
 def matrix_to_rpy(R: ArrayLike, *, degrees: bool = False) -> NDArray:
     """Roll, pitch, yaw of rotations (..., 3, 3) -> (..., 3); pitch in [-pi/2, pi/2].
 
-    At pitch = +-pi/2 (gimbal lock) roll is set to zero and yaw carries the whole rotation
-    about the vertical.
+    At pitch = +-pi/2 (gimbal lock) only roll -+ yaw is defined: yaw is set to zero and roll
+    carries it (scipy's convention).
     """
     rot, lead = _to_scipy(R)
     with warnings.catch_warnings():

@@ -297,6 +297,9 @@ def test_same_seed_same_result_and_batch_equals_singles():
     ({"criterion": "best"}, "criterion: expected one of nearest"),
     ({"tol_position": 0}, "tol_position: expected a positive tolerance"),
     ({"q0": [0, 0]}, "q0: expected last axis 6"),
+    ({"seed": -1}, "seed: expected a non-negative whole number, found -1"),
+    ({"seed": 1.5}, "seed: expected a non-negative whole number, found 1.5"),
+    ({"weights": [1, 1, 1, 1, 1, -1]}, "weights: expected 6 non-negative numbers"),
 ])
 def test_bad_arguments_are_refused(kwargs, words):
     robot = ROBOTS["ur5"]
@@ -309,7 +312,7 @@ def test_bad_targets_and_robots_without_closed_form():
         ik(ROBOTS["ur5"], np.eye(3))
     with pytest.raises(InputError, match="target: expected a rotation part that is orthonormal"):
         ik(ROBOTS["ur5"], np.diag([2.0, 1, 1, 1]))
-    with pytest.raises(InputError, match="found panda: use armkit.ik"):
+    with pytest.raises(InputError, match="found panda, which only the numeric solvers serve"):
         ik_solutions(ROBOTS["panda"], np.eye(4))
     with pytest.raises(InputError, match="its geometry has no closed form"):
         ik(ROBOTS["tool_changer_6dof"], np.eye(4), method="analytic")

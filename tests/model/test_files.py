@@ -124,7 +124,7 @@ def test_only_fixed_rows(tmp_path):
 @pytest.mark.parametrize("joint, field, words", [
     ("{type: revolute, axis: [0, 0, 1], limits: [-1, 1]}", "joints[0]", "a point on the axis"),
     ("{type: revolute, axis: [0, 0, 0], point: [0, 0, 0]}", "joints[0]", "a non-zero axis"),
-    ("{type: revolute, axis: [0, 1], point: [0, 0, 0]}", "joints[0].axis", "at least 3 items"),
+    ("{type: revolute, axis: [0, 1], point: [0, 0, 0]}", "joints[0].axis", "at least 3 item(s), found 2"),
 ])
 def test_screw_file_mistakes(tmp_path, joint, field, words):
     text = ("name: s\nunits: {length: mm, angle: deg}\nconvention: poe\n"
@@ -174,3 +174,8 @@ def test_robot_tables_are_read_only(any_robot):
         if hasattr(table, name):
             with pytest.raises(ValueError):
                 getattr(table, name)[0, 3] = 9.0
+
+
+def test_an_empty_joint_list(tmp_path):
+    with pytest.raises(ModelFileError, match=r"joints: expected at least 1 item\(s\), found 0"):
+        load_robot(write(tmp_path, GOOD.split("joints:")[0] + "joints: []\n"))

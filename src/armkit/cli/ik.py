@@ -92,7 +92,9 @@ def ik_command(
 def _show(model, doc: dict, listed: bool) -> None:
     units = doc["units"]
     names = model.joint_names
-    if listed:
+    if listed and not doc["solutions"]:
+        stdout.print("closed form: no solution reaches the target")
+    elif listed:
         table = Table(*names, "within limits", title=f"closed-form solutions ({units['angle']}, "
                       f"{units['length']})", box=None, title_justify="left")
         for s in doc["solutions"]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Annotated
 
 import numpy as np
@@ -54,14 +55,16 @@ def robots(as_json: JsonFlag = False) -> None:
     stdout.print(table)
 
 
-def _joint_rows(robot: Robot) -> list[dict]:
-    """The robot's joints as its file gives them (file units), including fixed rows."""
-    if isinstance(robot.table, URDFTable):
-        return [{"name": j.name, "type": j.kind, "xyz": j.xyz.tolist(), "rpy": j.rpy.tolist(),
-                 "axis": j.axis.tolist(),
-                 "limits": None if j.limits is None else [j.limits.lower, j.limits.upper]}
+def _joint_rows(robot: Robot, units: Units) -> list[dict]:
+    """The robot's joints as its file gives them, in `units`, including fixed rows."""
+    if isinstance(robot.table, URDFTable):             # a URDF speaks m and rad
+        to = {"xyz": units.length_from_si, "rpy": units.angle_from_si}
+        return [{"name": j.name, "type": j.kind, "xyz": to["xyz"](j.xyz), "rpy": to["rpy"](j.rpy),
+                 "axis": j.axis, "limits": None if j.limits is None else
+                 (units.angle_from_si if j.kind != "prismatic" else units.length_from_si)(
+                     [j.limits.lower, j.limits.upper])}
                 for j in robot.table.joints]
-    return robot_document(robot)["joints"]
+    return robot_document(dataclasses.replace(robot, units=units))["joints"]
 
 
 @app.command()
@@ -72,11 +75,11 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
     frames = armkit.fk_frames(model, np.zeros(model.n))
     names = ["base"] + list(model.joint_names[:-1]) + ["tool"]
     frame_rows = [{"frame": name, **pose_view(T, units)} for name, T in zip(names, frames)]
-    joints = _joint_rows(model)
+    joints = _joint_rows(model, units)
     if as_json:
         return print_json({"name": model.name, "description": model.description,
-                           "dof": model.n, "units": {"length": model.units.length,
-                                                     "angle": model.units.angle},
+                           "dof": model.n, "units": {"length": units.length,
+                                                     "angle": units.angle},
                            "joints": joints,
                            "frames_at_zero": [{k: v for k, v in row.items() if k != "matrix"}
                                               for row in frame_rows]})
@@ -85,7 +88,8 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
     if model.description:
         stdout.print(model.description)
     columns = list(dict.fromkeys(key for row in joints for key in row))
-    table = Table(*columns, title="joints (file units)", box=None, title_justify="left")
+    table = Table(*columns, title=f"joints ({units.length}, {units.angle})", box=None,
+                  title_justify="left")
     for row in joints:
         table.add_row(*[_cell(row.get(c)) for c in columns])
     stdout.print(table)

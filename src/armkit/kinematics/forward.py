@@ -72,7 +72,8 @@ def fk_frames(robot: Robot, q: ArrayLike) -> NDArray:
     -------
     frames : ndarray, shape (..., n + 1, 4, 4)
         ``frames[..., 0]`` is ``T_base``; ``frames[..., i]`` is link frame i (for DH tables the
-        DH frame i, for URDF the child link of joint i); ``frames[..., n]`` is the tool pose.
+        DH frame of moving joint i, with any fixed rows right after it; for URDF the child link
+        of joint i); ``frames[..., n]`` is the tool pose.
     """
     moved, T = joint_frames(robot, q)
     lead = T.shape[:-2]

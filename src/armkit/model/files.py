@@ -186,6 +186,9 @@ def validation_error(path: str, err: ValidationError, model: type[BaseModel]) ->
     loc, kind, msg = tuple(first["loc"]), first["type"], first["msg"]
     if kind == "missing":
         return ModelFileError(path, _field_path(loc), "a value", "nothing")
+    if kind == "too_short":
+        return ModelFileError(path, _field_path(loc), f"at least {first['ctx']['min_length']} "
+                              f"item(s)", f"{first['ctx']['actual_length']}")
     if kind == "extra_forbidden":
         known = _fields_at(model, loc[:-1])
         hint = difflib.get_close_matches(str(loc[-1]), known, n=1)

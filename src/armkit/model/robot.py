@@ -26,6 +26,11 @@ class Units:
     length: Literal["m", "mm"] = "m"
     angle: Literal["rad", "deg"] = "rad"
 
+    def __post_init__(self):
+        if self.length not in ("m", "mm") or self.angle not in ("rad", "deg"):
+            raise InputError(f"units: expected length m or mm and angle rad or deg, found "
+                             f"{self.length!r} and {self.angle!r}")
+
     # mm -> m divides by 1000 (correctly rounded for decimal file values such as 525.5);
     # deg <-> rad goes through numpy's deg2rad / rad2deg.
     def length_to_si(self, x: ArrayLike) -> NDArray:
@@ -91,12 +96,12 @@ class Robot:
 
     def q_to_si(self, q: ArrayLike) -> NDArray:
         """Joint values (..., n) from file units (deg, mm, ...) to rad and m."""
-        q = np.asarray(q, dtype=float)
+        q = joint_array(self, q)
         return np.where(self.chain.revolute, self.units.angle_to_si(q), self.units.length_to_si(q))
 
     def q_from_si(self, q: ArrayLike) -> NDArray:
         """Joint values (..., n) from rad and m to file units."""
-        q = np.asarray(q, dtype=float)
+        q = joint_array(self, q)
         return np.where(self.chain.revolute, self.units.angle_from_si(q),
                         self.units.length_from_si(q))
 

@@ -177,6 +177,11 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         raise InputError(f"criterion: expected one of {', '.join(CRITERIA)}, found {criterion!r}")
     if weights is not None:
         weights = joint_array(robot, weights, "weights")
+        if weights.shape != (robot.n,) or (weights < 0).any():
+            raise InputError(f"weights: expected {robot.n} non-negative numbers, found "
+                             f"{weights.tolist()}")
+    if not (isinstance(seed, (int, np.integer)) and 0 <= seed < 2**63):
+        raise InputError(f"seed: expected a non-negative whole number, found {seed!r}")
     for name, value in (("tol_position", tol_position), ("tol_rotation", tol_rotation)):
         if not value > 0:
             raise InputError(f"{name}: expected a positive tolerance, found {value}")
@@ -321,7 +326,7 @@ def ik_solutions(robot: Robot, target: ArrayLike, *, mask: str | ArrayLike | Non
     if family is None:
         raise InputError(f"robot: expected an arm with a closed form (lift-and-swing, yaw and "
                          f"three pitches, three parallel joints and a wrist, or a spherical "
-                         f"wrist), found {robot.name}: use armkit.ik")
+                         f"wrist), found {robot.name}, which only the numeric solvers serve")
     T = as_transform(target, "target")
     if T.shape != (4, 4):
         raise InputError(f"target: expected one pose (4, 4), found {T.shape}")

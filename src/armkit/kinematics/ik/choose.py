@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.errors import InputError
 from armkit.model.robot import Robot
 
 CRITERIA = {
@@ -41,9 +40,8 @@ def within_limits(robot: Robot, q: NDArray, slack: float = 1e-12) -> NDArray:
 
 def scores(robot: Robot, q: NDArray, q_ref: NDArray, criterion: str,
            weights: NDArray | None) -> NDArray:
-    """Cost of each candidate (..., K, n) under the criterion, lower is better; (..., K)."""
-    if criterion not in CRITERIA:
-        raise InputError(f"criterion: expected one of {', '.join(CRITERIA)}, found {criterion!r}")
+    """Cost of each candidate (..., K, n) under a criterion of `CRITERIA` (checked by the
+    caller), lower is better; (..., K)."""
     dq = q - q_ref[..., None, :]
     if criterion == "nearest":
         w = np.ones(robot.n) if weights is None else weights
@@ -54,6 +52,8 @@ def scores(robot: Robot, q: NDArray, q_ref: NDArray, criterion: str,
     if criterion == "manipulability":
         from armkit.kinematics.jacobian import manipulability
         return -manipulability(robot, np.nan_to_num(q))
-    span = np.where(np.isfinite(robot.upper - robot.lower), robot.upper - robot.lower, np.inf)
-    margin = np.minimum(q - robot.lower, robot.upper - q) / span
+    # A joint without finite limits has all the margin there is.
+    finite = np.isfinite(robot.lower) & np.isfinite(robot.upper)
+    span = np.where(finite, robot.upper - robot.lower, 1.0)
+    margin = np.where(finite, np.minimum(q - robot.lower, robot.upper - q) / span, np.inf)
     return -np.min(margin, axis=-1)

@@ -6,7 +6,8 @@ parallel (``prange``): a batch never loops in Python. Per iteration: tool pose a
 base frame, rotation about the tool's axes) restricted to the mask's rows, and the step
 
 - ``newton`` (the inspection-robot paper's method): the least-norm solution of ``A dq = e``,
-  taken whole; stops when the step is below the tolerance;
+  taken whole; done when the pose is within the tolerances, stuck when no step is left
+  (below 1e-15);
 - ``lm`` (Levenberg-Marquardt): ``(A^T A + lambda I) dq = A^T e``, kept only if it lowers
   ``|e|^2``, with lambda divided by 10 after a kept step and multiplied by 10 after a refused one.
 

@@ -119,10 +119,11 @@ def task_errors(T: ArrayLike, T_target: ArrayLike, mask: NDArray) -> tuple[NDArr
     -------
     position_error, rotation_error : ndarray, shape (...,)
     """
-    T, T_target = np.broadcast_arrays(np.asarray(T, dtype=float), np.asarray(T_target, dtype=float))
-    lead = T.shape[:-2]
-    flat, flat_target = T.reshape(-1, 4, 4), T_target.reshape(-1, 4, 4)
+    T, T_target = np.asarray(T, dtype=float), np.asarray(T_target, dtype=float)
+    lead = np.broadcast_shapes(T.shape[:-2], T_target.shape[:-2])
+    # Copies, not broadcast views: numba wants arrays it may own.
+    flat = np.broadcast_to(T, lead + (4, 4)).reshape(-1, 4, 4).copy()
+    flat_target = np.broadcast_to(T_target, lead + (4, 4)).reshape(-1, 4, 4).copy()
     position, rotation = np.empty(flat.shape[0]), np.empty(flat.shape[0])
-    _errors_batch(np.ascontiguousarray(flat), np.ascontiguousarray(flat_target),
-                  np.asarray(mask, dtype=np.int64), position, rotation)
+    _errors_batch(flat, flat_target, np.asarray(mask, dtype=np.int64), position, rotation)
     return position.reshape(lead), rotation.reshape(lead)
