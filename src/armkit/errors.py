@@ -43,7 +43,7 @@ class DriveError(ArmkitError):
     Parameters
     ----------
     cause : str
-        What went wrong, e.g. ``no response within 1 s (1 attempt)``.
+        What went wrong, e.g. ``no response within 1 s x 1 attempt``.
     last_accepted : int or None
         Index (from 0) of the last waypoint the drive acknowledged; None if none was.
     waypoint : int or None

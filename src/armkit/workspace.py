@@ -278,7 +278,7 @@ class _Plan:
         return -(-self.samples // self.chunk)
 
 
-@dataclass(eq=False)
+@dataclass(frozen=True, eq=False)
 class _Partial:
     """The reduction of some chunks: bounds, largest squared reaches, sparse voxel counts."""
 
@@ -424,7 +424,11 @@ def _run_dask(plan: _Plan, client, progress: Callable[[int, int], None] | None) 
         else:
             running.add(client.submit(_merge, held, future, pure=False))
             held = None
-    return held.result()
+    try:
+        return held.result()
+    except Exception as err:            # a worker's failure comes back as the worker's error
+        raise InputError(f"scheduler: expected workers that run armkit, found "
+                         f"{type(err).__name__}: {err}") from None
 
 
 def workspace(robot: Robot, n: int, *, seed: int | None = 0, resolution: float | None = None,

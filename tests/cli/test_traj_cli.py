@@ -126,3 +126,23 @@ def test_point_to_point_case_file_with_scalar_limits(tmp_path):
     v = np.array([j["peak_velocity"] for j in jerk["joints"]])
     np.testing.assert_allclose(v / v[0], np.array([30, 45, 60, 90]) / 30, rtol=1e-9)
     assert (tmp_path / "p2p_joints.png").exists()
+
+
+@pytest.mark.parametrize("args, words", [
+    (("tool_changer_6dof", "--times", "0,2,4", "--joints", "2,3", "--point", "1,2",
+      "--point", "3", "--point", "4,5"), "points: expected rows of 2 values"),
+    (("tool_changer_6dof", "--start", "0,0,0,0,0,0", "--goal", "10,0,0,0,0,0",
+      "--velocity", "-5"), "velocity: expected positive limits, found [-5.0]"),
+    (("nope.yaml",), "case: expected a case file or a robot, found no file nope.yaml"),
+])
+def test_more_bad_input_exits_2(args, words, tmp_path):
+    result = runner.invoke(app, ["traj", *args, "--out", str(tmp_path)])
+    assert result.exit_code == 2 and words in result.stderr, result.stderr
+
+
+def test_out_that_is_a_file_is_refused(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = runner.invoke(app, ["traj", "tool_changer_6dof", "--start", "0,0,0,0,0,0",
+                                 "--goal", "10,0,0,0,0,0", "--out", str(blocker / "sub")])
+    assert result.exit_code == 2 and "--out: expected a folder armkit can write" in result.stderr

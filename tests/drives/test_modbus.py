@@ -99,8 +99,10 @@ def test_velocity_violation_with_times(inspection_map, sim):
         send_waypoints(inspection_map, q, [0.0, 1.0, 1.5], port=sim.port)
     with pytest.raises(InputError, match="strictly increasing"):
         check_waypoints(inspection_map, q, [0.0, 1.0, 1.0])
-    with pytest.raises(InputError, match="expected 3 finite values"):
+    with pytest.raises(InputError, match=r"expected 3 values \(one per waypoint\), found shape"):
         check_waypoints(inspection_map, q, [0.0, 1.0])
+    with pytest.raises(InputError, match="expected finite values, found nan at waypoint 1"):
+        check_waypoints(inspection_map, q, [0.0, np.nan, 2.0])
     with pytest.raises(InputError, match=r"waypoints: expected last axis 6"):
         check_waypoints(inspection_map, np.zeros((3, 5)))
     assert list(sim.requests) == []

@@ -42,18 +42,23 @@ def read_waypoints(path: Path, robot: Robot) -> tuple[np.ndarray, np.ndarray | N
         text = Path(path).read_text(encoding="utf-8")
     except OSError as err:
         raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
+    except UnicodeDecodeError as err:
+        raise ModelFileError(str(path), "", "a UTF-8 text file",
+                             f"byte {err.object[err.start]:#04x} at offset {err.start}") from None
     if Path(path).suffix.lower() == ".json":
         return _json_waypoints(text, str(path), robot)
-    rows = [row for row in csv.reader(text.splitlines()) if row and any(c.strip() for c in row)]
+    # (line number, row) of the rows that hold anything, so errors name the file's own lines.
+    rows = [(line, row) for line, row in enumerate(csv.reader(text.splitlines()), start=1)
+            if row and any(c.strip() for c in row)]
     if not rows:
         raise ModelFileError(str(path), "", "waypoints, one a row", "an empty file")
-    header, first = None, 1
-    if not _numbers(rows[0]):
-        header = [c.strip() for c in rows[0]]
-        rows, first = rows[1:], 2
+    header = None
+    if not _numbers(rows[0][1]):
+        header = [c.strip() for c in rows[0][1]]
+        rows = rows[1:]
     columns = _columns(header, str(path), robot)
     q, t = [], []
-    for line, row in enumerate(rows, start=first):
+    for line, row in rows:
         values = _numbers(row)
         width = len(columns) if header else len(row)
         if values is None or len(values) != width or (not header and width not in

@@ -83,18 +83,27 @@ def _numbers(name: str, text: str | None) -> list[float] | None:
             from None
 
 
-def _is_case_file(source: str) -> bool:
-    return source.endswith((".yaml", ".yml")) and Path(source).is_file() and \
-        isinstance(doc := read_yaml(source), dict) and "robot" in doc
+def _case_document(source: str) -> dict | None:
+    """The document of a case file, or None if the source names a robot (a built-in name or
+    a robot file: a YAML file without a ``robot`` field)."""
+    if not source.endswith((".yaml", ".yml")):
+        return None
+    if not Path(source).is_file():
+        raise InputError(f"case: expected a case file or a robot, found no file {source}")
+    document = read_yaml(source)
+    return document if isinstance(document, dict) and "robot" in document else None
 
 
-def load_case(source: str, overrides: dict[str, Any]) -> CaseFile:
-    """The case from a file (or a robot name) with the given options laid over it."""
-    document, where = ({**read_yaml(source)}, source) if _is_case_file(source) else \
-        ({"robot": source}, "command line")
+def load_case(source: str, overrides: dict[str, Any]) -> tuple[CaseFile, bool]:
+    """The case from a file (or a robot) with the given options laid over it, and whether it
+    came from a case file."""
+    document = _case_document(source)
+    from_file = document is not None
+    where = source if from_file else "command line"
+    document = {**document} if from_file else {"robot": source}
     document.update({k: v for k, v in overrides.items() if v is not None})
     try:
-        return CaseFile.model_validate(document)
+        return CaseFile.model_validate(document), from_file
     except ValidationError as err:
         raise validation_error(where, err, CaseFile) from None
 
@@ -107,7 +116,9 @@ def _per_joint(robot: Robot, name: str, value: Limit, default: np.ndarray) -> np
     if v.shape not in ((1,), (robot.n,)):
         raise InputError(f"{name}: expected one value or {robot.n} (one per joint), "
                          f"found {v.size}")
-    return np.abs(robot.q_to_si(np.broadcast_to(v, (robot.n,))))
+    if not (v > 0).all():
+        raise InputError(f"{name}: expected positive limits, found {v.tolist()}")
+    return robot.q_to_si(np.broadcast_to(v, (robot.n,)))
 
 
 def _joint_index(robot: Robot, joint: int | str) -> int:
@@ -143,10 +154,10 @@ def build(case: CaseFile, robot: Robot) -> tuple[dict[str, tj.Trajectory], list[
                 out[name] = tj.jerk_limited(q0, qf, vmax, amax, jmax, sync=case.sync)
         return out, [j for j in range(robot.n) if q0[j] != qf[j]]
     joints = [_joint_index(robot, j) for j in (case.joints or range(1, robot.n + 1))]
-    points = np.asarray(case.points, dtype=float)
-    if points.ndim != 2 or points.shape[1] != len(joints):
+    if any(len(p) != len(joints) for p in case.points):
         raise InputError(f"points: expected rows of {len(joints)} values (one per joint in "
-                         f"joints), found {[len(p) for p in case.points]}")
+                         f"joints), found rows of {[len(p) for p in case.points]}")
+    points = np.asarray(case.points, dtype=float)
     hold = (robot.q_to_si(_joint_vector(robot, "hold", case.hold)) if case.hold is not None
             else np.clip(0.0, robot.lower, robot.upper))
     q = np.tile(hold, (len(points), 1))
@@ -232,13 +243,13 @@ def traj(
                  "velocity": _numbers("velocity", velocity),
                  "acceleration": _numbers("acceleration", acceleration),
                  "jerk": _numbers("jerk", jerk)}
-    spec = load_case(case, overrides)
+    spec, from_file = load_case(case, overrides)
     out = output_folder(out)
     robot = armkit.robot(spec.robot)
     trajectories, moving = build(spec, robot)
     table = tj.compare(trajectories)
     units = SI if si else robot.units
-    stem = Path(case).stem if _is_case_file(case) else f"{robot.name}_traj"
+    stem = Path(case).stem if from_file else f"{robot.name}_traj"
     figures = _figures(robot, trajectories, moving, out, stem, via=spec.times is not None)
     results = [{"label": label, "duration": s.duration, "knots": trajectories[label].knots,
                 "joints": _rows(robot, trajectories[label], s, moving, units)}

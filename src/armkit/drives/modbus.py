@@ -143,9 +143,12 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
     if t is None:
         return q
     t = np.asarray(t, dtype=float)
-    if t.shape != (len(q),) or not np.isfinite(t).all():
-        raise InputError(f"waypoint times: expected {len(q)} finite values, found shape "
-                         f"{t.shape}")
+    if t.shape != (len(q),):
+        raise InputError(f"waypoint times: expected {len(q)} values (one per waypoint), found "
+                         f"shape {t.shape}")
+    if not np.isfinite(t).all():
+        raise InputError(f"waypoint times: expected finite values, found "
+                         f"{t[~np.isfinite(t)][0]} at waypoint {int(np.argmax(~np.isfinite(t)))}")
     dt = np.diff(t)
     if (dt <= 0).any():
         k = int(np.argmax(dt <= 0))
@@ -419,7 +422,7 @@ class DriveClient:
     def _write(self, k: int, block: list[int]) -> int:
         """Write waypoint k whole and wait for its acknowledgement; its index on the drive."""
         m = self.map
-        index = self._index % 65535 + 1 if self._index is not None else 0
+        index = self._index % 65535 + 1
         if m.waypoint is not None:
             block[m.waypoint - m.block_start] = index
         last = k - 1 if k > 0 else None

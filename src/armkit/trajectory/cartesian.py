@@ -50,8 +50,8 @@ class CartesianPath:
         "ok", "out of reach" (no configuration reaches the next pose), "joint limits", or
         "singularity" (the next pose needs another branch: the arm would jump).
     stop : float
-        Path parameter (0..1) of the last sample followed: 1.0 exactly on success, 0.0 if not
-        even the start was solved.
+        Path parameter (0..1) of the last sample followed: 1.0 exactly on success; 0.0 when
+        only the start was followed, or not even the start (then q has no row).
     mask : str
         The task followed.
     """
@@ -133,9 +133,9 @@ def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: Arra
     max_iter : int
         IK iterations per sample.
     max_joint_step : float, optional
-        Largest joint change between samples (rad or m) before the line counts as crossing a
-        singularity; default 0.35 rad (20 deg), about ten times what a sample of 5 mm moves a
-        well-conditioned arm of a metre.
+        Largest change of any joint between samples before the line counts as crossing a
+        singularity: rad for revolute joints, m for prismatic ones. Default 0.35 (20 deg),
+        about ten times what a sample of 5 mm moves a well-conditioned arm of a metre.
 
     Returns
     -------
@@ -155,7 +155,9 @@ def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: Arra
     q0 = joint_array(robot, q0, "q0")
     if q0.shape != (robot.n,):
         raise InputError(f"q0: expected one configuration ({robot.n},), found {q0.shape}")
-    for name, value in (("step", step), ("angle_step", angle_step)):
+    max_joint_step = 0.35 if max_joint_step is None else max_joint_step
+    for name, value in (("step", step), ("angle_step", angle_step),
+                        ("max_joint_step", max_joint_step)):
         if not value > 0:
             raise InputError(f"{name}: expected a positive step, found {value}")
     mask = default_mask(robot) if mask is None else as_mask(mask)
@@ -171,7 +173,7 @@ def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: Arra
     followed, cause = _track(poses, q0, k.kinds, k.offsets, k.pre, k.links, lower, chain.upper,
                              turn, mask.astype(np.int64), np.flatnonzero(mask).astype(np.int64),
                              float(tol_position), float(tol_rotation), int(max_iter),
-                             float(0.35 if max_joint_step is None else max_joint_step), q)
+                             float(max_joint_step), q)
     q = q[:followed]
     pe, re = task_errors(fk(robot, q), poses[:followed], mask)
     if cause == 0:

@@ -286,14 +286,6 @@ def shift(c: NDArray, delta: ArrayLike) -> NDArray:
     return c
 
 
-def pad(c: NDArray, K: int) -> NDArray:
-    """Coefficients (..., k, n) zero padded to K powers."""
-    extra = K - c.shape[-2]
-    if extra <= 0:
-        return c
-    return np.concatenate([c, np.zeros(c.shape[:-2] + (extra, c.shape[-1]))], axis=-2)
-
-
 def merge(times: NDArray, coefficients: NDArray, tol: float = 1e-12) -> tuple[NDArray, NDArray]:
     """One set of breaks for joints that each have their own (time-synchronised profiles).
 

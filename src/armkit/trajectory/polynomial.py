@@ -7,7 +7,7 @@ The quintic between rest states is the inspection-robot paper's law (SPEC.md, R3
 Both are one-segment cases of `armkit.trajectory.spline`: the cubic meets the end positions and
 velocities, the quintic also the end accelerations. All joints share the duration, so they start
 and finish together. Without a duration, the shortest one that keeps every joint within its
-velocity, acceleration (and, for the quintic, jerk) limit is taken, from the laws' peak values
+velocity, acceleration and jerk limit is taken, from the laws' peak values
 between rest states:
 
 =======  =========  ===========================  ============
