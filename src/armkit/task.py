@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
 from armkit.model import Robot, robot as load
-from armkit.spatial import invert, pose_from_xyz_rpy
+from armkit.spatial import pose_from_xyz_rpy
 from armkit.trajectory import Trajectory, quintic
 
 if TYPE_CHECKING:
@@ -41,10 +41,9 @@ class DemoTask:
     # The camera, 2.2 m up beside the arm, looking straight down (its z axis along -z).
     T_base_camera: NDArray = field(default_factory=lambda: pose_from_xyz_rpy(
         [0.6, -0.2, 2.2], [np.pi, 0.0, np.pi / 2]))
-    # The inlet as the camera sees it: 1.0, 0.3, 0.8 m from the base, heading 30 deg.
-    target_in_camera: NDArray = field(default_factory=lambda: invert(pose_from_xyz_rpy(
-        [0.6, -0.2, 2.2], [np.pi, 0.0, np.pi / 2])) @ pose_from_xyz_rpy(
-        [1.0, 0.3, 0.8], [0.0, 0.0, np.pi / 6]))
+    # The inlet as the camera reports it (in the base frame: 1.0, 0.3, 0.8 m, yaw 30 deg).
+    target_in_camera: NDArray = field(default_factory=lambda: pose_from_xyz_rpy(
+        [0.5, 0.4, 1.4], np.deg2rad([180.0, 0.0, 60.0])))
     q_current: NDArray = field(default_factory=lambda: np.array([0.05, 0.0, 0.5, -0.5]))
     waypoints: int = 10                  # paper 1 sends 10 waypoints to the motors
     drive_map: str = "water_supply.map.yaml"
