@@ -197,7 +197,8 @@ def faults(m, q) -> None:
             report = getattr(err, "cause", str(err))
         partial = sum((a, n) != (m.block_start, m.block_count) for a, n in sim.writes
                       if a < m.block_start + m.block_count and a + n > m.block_start)
-        expected = None if kind in (None, "refuse", "limit") else 2
+        # The drive took waypoints 0..2; a corrupt write it takes too (with the wrong value).
+        expected = None if kind in (None, "refuse", "limit") else 3 if kind == "corrupt" else 2
         mark = "" if last == expected else f"  WRONG, expected {expected}"
         sim.stop()
         print(f"  {name:26} {'none' if last is None else last:>4} {str(unknown):>7} "

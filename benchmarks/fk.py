@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -54,17 +53,23 @@ def compile_times() -> tuple[float, float]:
 
 
 def memory_at(n: int) -> tuple[float, float, float]:
-    """(seconds, output GB, peak GB beyond input and output) for fk of n configurations."""
-    robot = armkit.robot("ur5")
-    Q = np.random.default_rng(0).uniform(-np.pi, np.pi, (n, 6))
-    armkit.fk(robot, Q[:10])
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20       # GB (ru_maxrss KiB)
-    t = time.perf_counter()
-    T = armkit.fk(robot, Q)
-    seconds = time.perf_counter() - t
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
-    out = T.nbytes / 2**30
-    return seconds, out, max(0.0, peak - before - out)
+    """(seconds, output GB, peak GB beyond input and output) for fk of n configurations, in a
+    fresh process, so that no earlier high-water mark hides the call's temporaries."""
+    code = f"""
+import resource, time, numpy as np, armkit
+robot = armkit.robot("ur5")
+Q = np.random.default_rng(0).uniform(-np.pi, np.pi, ({n}, 6))
+armkit.fk(robot, Q[:10])
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+t = time.perf_counter()
+T = armkit.fk(robot, Q)
+seconds = time.perf_counter() - t
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
+print(seconds, T.nbytes / 2**30, peak - before - T.nbytes / 2**30)
+"""
+    done = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    seconds, out, extra = map(float, done.stdout.split())
+    return seconds, out, max(0.0, extra)
 
 
 def main() -> None:
