@@ -187,7 +187,7 @@ def _rows(robot: Robot, tr: tj.Trajectory, s: tj.Stats, joints: list[int], units
     # Rounding leaves steps of 1e-15 where the conditions make them zero.
     steps = np.where(np.abs(steps) > 1e-9 * (1.0 + s.peak_acceleration), steps, 0.0) * scale
     return [{"joint": robot.joint_names[j], "number": j + 1,
-             "unit": units.angle if robot.chain.revolute[j] else units.length,
+             "unit": units.of_joint(robot.chain.revolute[j]),
              "peak_velocity": s.peak_velocity[j] * scale[j],
              "peak_acceleration": s.peak_acceleration[j] * scale[j],
              "peak_jerk": s.peak_jerk[j] * scale[j],

@@ -138,8 +138,8 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
         k, i = np.argwhere(outside)[0]
         value, lo, hi = robot.q_from_si([q[k], robot.lower, robot.upper])[:, i]
         raise InputError(f"waypoint {k}, joint {robot.joint_names[i]}: {value:.6g} "
-                         f"{_unit(register_map, i)} outside the limits {lo:.6g}..{hi:.6g} "
-                         f"{_unit(register_map, i)}")
+                         f"{register_map.robot.joint_units[i]} outside the limits {lo:.6g}..{hi:.6g} "
+                         f"{register_map.robot.joint_units[i]}")
     if t is None:
         return q
     t = np.asarray(t, dtype=float)
@@ -160,14 +160,9 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
         k, i = np.argwhere(too_fast)[0]
         v, limit = robot.q_from_si([speed[k], robot.chain.velocity_limits])[:, i]
         raise InputError(f"waypoints {k} -> {k + 1}, joint {robot.joint_names[i]}: {v:.6g} "
-                         f"{_unit(register_map, i)}/s over the velocity limit {limit:.6g} "
-                         f"{_unit(register_map, i)}/s")
+                         f"{register_map.robot.joint_units[i]}/s over the velocity limit {limit:.6g} "
+                         f"{register_map.robot.joint_units[i]}/s")
     return q
-
-
-def _unit(register_map: RegisterMap, i: int) -> str:
-    robot = register_map.robot
-    return robot.units.angle if robot.chain.revolute[i] else robot.units.length
 
 
 class _Failed(Exception):

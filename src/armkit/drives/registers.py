@@ -411,7 +411,7 @@ def _joints(spec: RegisterMapFile, path: str, robot: Robot) -> tuple[JointRegist
         lo, hi = joint.counts([lower[i], upper[i]])
         low, high = joint.counts_range
         if lo < low or hi > high:
-            unit = robot.units.angle if robot.chain.revolute[i] else robot.units.length
+            unit = robot.joint_units[i]
             raise ModelFileError(
                 path, f"{where}.type", f"a type that holds the joint's limits "
                 f"{lower[i]:g}..{upper[i]:g} {unit} at scale {j.scale:g} "

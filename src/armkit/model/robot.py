@@ -31,6 +31,10 @@ class Units:
             raise InputError(f"units: expected length m or mm and angle rad or deg, found "
                              f"{self.length!r} and {self.angle!r}")
 
+    def of_joint(self, revolute: bool) -> str:
+        """The unit of a joint's value: the angle unit (revolute) or the length unit."""
+        return self.angle if revolute else self.length
+
     # mm -> m divides by 1000 (correctly rounded for decimal file values such as 525.5);
     # deg <-> rad goes through numpy's deg2rad / rad2deg.
     def length_to_si(self, x: ArrayLike) -> NDArray:
@@ -83,6 +87,11 @@ class Robot:
     @property
     def joint_names(self) -> tuple[str, ...]:
         return self.chain.names
+
+    @property
+    def joint_units(self) -> tuple[str, ...]:
+        """Each joint value's unit in the robot's file ("deg", "mm", ...)."""
+        return tuple(self.units.of_joint(r) for r in self.chain.revolute)
 
     @property
     def lower(self) -> NDArray:

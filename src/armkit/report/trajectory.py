@@ -33,7 +33,7 @@ def joint_label(robot: Robot, j: int) -> str:
 
 def joint_unit(robot: Robot, j: int) -> str:
     """The file unit of joint j's value: the angle unit or the length unit."""
-    return robot.units.angle if robot.chain.revolute[j] else robot.units.length
+    return robot.joint_units[j]
 
 
 def _units(robot: Robot, joints: Sequence[int], order: int) -> str:
