@@ -18,6 +18,7 @@ import typer
 from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
 from armkit.errors import DriveError, ModelFileError
 from armkit.model import Robot
+from armkit.model.files import read_text
 
 MapOption = Annotated[Path | None, typer.Option("--map", help="Register map file (YAML).")]
 RobotOption = Annotated[str | None, typer.Option(
@@ -38,13 +39,7 @@ def read_waypoints(path: Path, robot: Robot) -> tuple[np.ndarray, np.ndarray | N
     ------
     ModelFileError
     """
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as err:
-        raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
-    except UnicodeDecodeError as err:
-        raise ModelFileError(str(path), "", "a UTF-8 text file",
-                             f"byte {err.object[err.start]:#04x} at offset {err.start}") from None
+    text = read_text(path)
     if Path(path).suffix.lower() == ".json":
         return _json_waypoints(text, str(path), robot)
     # (line number, row) of the rows that hold anything, so errors name the file's own lines.

@@ -150,15 +150,20 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-def read_yaml(path: str | Path) -> Any:
-    """Parse a YAML file safely; any failure is a ModelFileError naming the line."""
+def read_text(path: str | Path) -> str:
+    """A UTF-8 text file's contents; a missing or undecodable file is a ModelFileError."""
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        return Path(path).read_text(encoding="utf-8")
     except OSError as err:
         raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
     except UnicodeDecodeError as err:
         raise ModelFileError(str(path), "", "a UTF-8 text file",
                              f"byte {err.object[err.start]:#04x} at offset {err.start}") from None
+
+
+def read_yaml(path: str | Path) -> Any:
+    """Parse a YAML file safely; any failure is a ModelFileError naming the line."""
+    text = read_text(path)
     try:
         return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
     except yaml.YAMLError as err:
