@@ -92,7 +92,7 @@ def _track(targets, q0, kinds, offsets, pre, links, lower, upper, turn, mask, ro
     for k in range(targets.shape[0]):
         previous = q.copy()
         ok, _, _ = _descend(q, targets[k], kinds, offsets, pre, links, lower, upper, turn, mask,
-                            rows, tol_p, tol_r, max_iter, LM, ws)
+                            rows, tol_p, tol_r, max_iter, LM, False, ws)
         if not ok:
             return k, 1
         step = 0.0

@@ -220,7 +220,7 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
         solver[numeric_targets] = f"analytic:{family.name}+lm"
     if numeric_targets.any():
         idx = np.flatnonzero(numeric_targets)
-        starts = numeric.seed_starts(robot, flat_T[idx], mask, bound / 4, count=SEEDS,
+        starts = numeric.seed_starts(robot, flat_T[idx], mask, bound / 10, count=SEEDS,
                                      samples=min(4096, max(256, 8 * len(idx))), seed=seed)
         # The closed form's nearest branch (polishing), or else the given q0, goes first.
         polishing = family is not None and method == "auto"

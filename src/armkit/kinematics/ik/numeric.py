@@ -14,7 +14,9 @@ base frame, rotation about the tool's axes) restricted to the mask's rows, and t
 Joint limits: a revolute joint whose range spans a full turn wraps (its angle is taken modulo
 2 pi into the range); any other joint that a step would push past a limit is held there and the
 step is taken with the others (a bound-constrained Gauss-Newton step). An attempt that has not
-reached the tolerances after ``max_iter`` iterations (or whose lambda grows past 1e8) starts
+reached the tolerances after ``max_iter`` iterations, whose lambda grows past 1e8, or that
+stalls (after six iterations, three more have not cut the squared residual to a quarter: it has
+settled in a local minimum, as the nearest start of about one ur5 target in ten does) starts
 again: from the next of the given starts, then from configurations drawn uniformly inside the
 limits (a splitmix64 stream per target, seeded from ``seed`` and the target's index, so results
 do not depend on thread scheduling). If every attempt fails, the best point found gets one
@@ -27,7 +29,6 @@ import math
 
 import numba
 import numpy as np
-from scipy.spatial import cKDTree
 
 from armkit.kinematics._kernels import pose_jacobian_one
 from armkit.kinematics.forward import fk
@@ -41,6 +42,7 @@ _fast = numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arc
 
 NEWTON, LM = 0, 1
 MAX_LAMBDA = 1e8
+STALL_AFTER, STALL_WINDOW, STALL_FACTOR = 6, 3, 0.25
 
 
 @_jit
@@ -235,21 +237,26 @@ def workspace(n, m):
 
 @_jit
 def _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows, tol_p, tol_r,
-             iterations, method, ws):
+             iterations, method, stall, ws):
     """One attempt from q (updated in place to where it ends): (converged, cost, iterations).
 
     LM only keeps steps that lower the cost, so it ends at its best point; Newton takes every
-    step and stops when the step vanishes.
+    step and stops when the step vanishes. With `stall`, an attempt that stops making progress
+    ends early.
     """
     n = q.shape[0]
     _, q_new, dq, free, T, J, T2, J2, e, A, e2, A2, E, w, Hn, gn, Hm, gm, y = ws
     pose_jacobian_one(q, kinds, offsets, pre, links, T, J)
     cost = _residual(T, J, Tt, rows, e, A, E, w)
     lam = 1e-3 if method == LM else 1e-15
+    earlier = np.full(STALL_WINDOW, np.inf)              # the cost 1, 2, 3 iterations ago
     for it in range(iterations):
         ep, er = task_errors_one(T, Tt, mask)
         if ep < tol_p and er < tol_r:
             return True, cost, it
+        if stall and it >= STALL_AFTER and cost > STALL_FACTOR * earlier[it % STALL_WINDOW]:
+            return False, cost, it
+        earlier[it % STALL_WINDOW] = cost
         for j in range(n):
             free[j] = True
         if not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
@@ -307,7 +314,7 @@ def solve_one(Tt, starts, kinds, offsets, pre, links, lower, upper, turn, sample
             dq[j] = 0.0
         _bounded(q, dq, lower, upper, turn, q)
         ok, cost, its = _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask,
-                                 rows, tol_p, tol_r, max_iter, method, ws)
+                                 rows, tol_p, tol_r, max_iter, method, True, ws)
         total += its
         if ok or cost < best:
             best = cost
@@ -315,12 +322,12 @@ def solve_one(Tt, starts, kinds, offsets, pre, links, lower, upper, turn, sample
                 q_out[j] = q[j]
         if ok:
             return True, total
-    # Near a singularity convergence slows down: an attempt may end close to a solution it
-    # had no time to reach. Give the best point a long last run.
+    # Near a singularity convergence slows down: an attempt may end (or be judged stalled)
+    # close to a solution it had no time to reach. Give the best point a long last run.
     for j in range(n):
         q[j] = q_out[j]
     ok, cost, its = _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows,
-                             tol_p, tol_r, 10 * max_iter, method, ws)
+                             tol_p, tol_r, 10 * max_iter, method, False, ws)
     total += its
     if ok or cost < best:
         for j in range(n):
@@ -405,28 +412,93 @@ def _features(T: np.ndarray, mask: np.ndarray, length: float) -> np.ndarray:
     return np.concatenate([T[..., :3, 3]] + [length * T[..., :3, a] for a in axes], axis=-1)
 
 
+@_jit
+def _cell(p, lo, inv, G):
+    """Grid cell (i, j, k) of the point p (3,), clipped to the G x G x G grid."""
+    return (min(max(int((p[0] - lo[0]) * inv[0]), 0), G - 1),
+            min(max(int((p[1] - lo[1]) * inv[1]), 0), G - 1),
+            min(max(int((p[2] - lo[2]) * inv[2]), 0), G - 1))
+
+
+@_jit
+def _grid(P, lo, inv, G):
+    """Points P (S, 3) sorted by grid cell: (order (S,), start (G^3 + 1,)); the points of cell
+    c are ``order[start[c]:start[c + 1]]``."""
+    S = P.shape[0]
+    cells = np.empty(S, dtype=np.int64)
+    start = np.zeros(G * G * G + 1, dtype=np.int64)
+    for s in range(S):
+        i, j, k = _cell(P[s], lo, inv, G)
+        cells[s] = (i * G + j) * G + k
+        start[cells[s] + 1] += 1
+    for c in range(G * G * G):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    order = np.empty(S, dtype=np.int64)
+    for s in range(S):
+        order[fill[cells[s]]] = s
+        fill[cells[s]] += 1
+    return order, start
+
+
+@_jit
+def _nearest_one(p, f, F, lo, inv, G, order, start, best, dist):
+    """The len(best) samples nearest the features f (d,) into best, searched cell shell by cell
+    shell around the position p (3,) until enough are found."""
+    count = best.shape[0]
+    dist[:] = np.inf
+    found = 0
+    ci, cj, ck = _cell(p, lo, inv, G)
+    for r in range(G):
+        for i in range(max(ci - r, 0), min(ci + r, G - 1) + 1):
+            for j in range(max(cj - r, 0), min(cj + r, G - 1) + 1):
+                for k in range(max(ck - r, 0), min(ck + r, G - 1) + 1):
+                    if max(abs(i - ci), abs(j - cj), abs(k - ck)) != r:
+                        continue                        # scanned in an earlier shell
+                    c = (i * G + j) * G + k
+                    for a in range(start[c], start[c + 1]):
+                        s = order[a]
+                        d = 0.0
+                        for m in range(f.shape[0]):
+                            d += (F[s, m] - f[m]) ** 2
+                        if d < dist[count - 1]:         # insert into the sorted shortlist
+                            b = count - 1
+                            while b > 0 and dist[b - 1] > d:
+                                dist[b], best[b] = dist[b - 1], best[b - 1]
+                                b -= 1
+                            dist[b], best[b] = d, s
+                        found += 1
+        if found >= count and r >= 1:
+            return
+
+
+@_pjit
+def _nearest(P_targets, F_targets, F, lo, inv, G, order, start, best):
+    for t in numba.prange(P_targets.shape[0]):
+        _nearest_one(P_targets[t], F_targets[t], F, lo, inv, G, order, start, best[t],
+                     np.empty(best.shape[1]))
+
+
 def seed_starts(robot, targets: np.ndarray, mask: np.ndarray, length: float, count: int = 4,
                 samples: int = 4096, seed: int = 0) -> np.ndarray:
-    """Starts (N, count, n) for targets (N, 4, 4): the joint vectors of the `count` nearest of
-    `samples` configurations drawn inside the limits.
+    """Starts (N, count, n) for targets (N, 4, 4): the joint vectors of `count` of `samples`
+    configurations drawn inside the limits, those nearest the target by `_features`.
 
-    Nearest by `_features` (position and the constrained tool axes); for a large batch, among
-    the 2 x count nearest by position alone: a 3-D tree answers many times faster than one over
-    all the features, and the start it gives is as good. The draw and its forward kinematics are paid
-    once per batch; a start near the target turns most solves into a few Gauss-Newton steps.
+    The samples' tool positions are sorted into a grid of about `samples` cells; each target
+    ranks the samples of the cells around its own (and further out until it has `count`), so
+    the starts are near in position first, then in the constrained tool axes. The draw and its
+    forward kinematics are paid once per batch; a start near the target turns most solves into
+    a few Gauss-Newton steps.
     """
     rng = np.random.default_rng([seed, 0x5EED])
     Q = rng.uniform(*robot.chain.sampling_limits, (samples, robot.n))
     T = fk(robot, Q)
-    N = targets.shape[0]
-    wanted = _features(targets, mask, length)
-    if N * samples <= 200_000:              # a few targets: plain distances beat a tree
-        d = _features(T, mask, length)[None, :, :] - wanted[:, None, :]
-        return Q[np.argsort(np.einsum("nkd,nkd->nk", d, d), axis=1)[:, :count]]
-    near = min(2 * count, samples)
-    _, idx = cKDTree(T[:, :3, 3]).query(targets[:, :3, 3], k=near)     # one thread: for a
-    # few thousand queries, starting more costs more than they save
-    idx = np.reshape(idx, (N, near))
-    d = _features(T, mask, length)[idx] - wanted[:, None, :]
-    best = np.argsort(np.einsum("nkd,nkd->nk", d, d), axis=1)[:, :count]
-    return Q[np.take_along_axis(idx, best, axis=1)]
+    P = np.ascontiguousarray(T[:, :3, 3])
+    G = max(1, round(samples ** (1 / 3)))
+    lo = P.min(axis=0)
+    inv = G / np.maximum(P.max(axis=0) - lo, 1e-12)
+    order, start = _grid(P, lo, inv, G)
+    best = np.empty((targets.shape[0], min(count, samples)), dtype=np.int64)
+    _nearest(np.ascontiguousarray(targets[:, :3, 3]), _features(targets, mask, length),
+             _features(T, mask, length), lo, inv, G, order, start, best)
+    return Q[best]
