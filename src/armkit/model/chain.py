@@ -17,6 +17,7 @@ onto z, and the fixed transforms between two motions multiplied out (``pre``, ``
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -220,7 +221,7 @@ class Chain:
         """Joint names, in chain order."""
         return tuple(j.name for j in self.joints)
 
-    @property
+    @cached_property
     def sampling_limits(self) -> tuple[NDArray, NDArray]:
         """Ranges to draw joint values from, (n,) each: the limits, where they are finite.
 
@@ -232,7 +233,7 @@ class Chain:
         lower = np.where(np.isfinite(self.lower), self.lower,
                          np.where(self.revolute, -np.pi, -1.0))
         upper = np.where(endless, lower + np.where(self.revolute, 2 * np.pi, 2.0), self.upper)
-        return lower, upper
+        return _frozen(lower), _frozen(upper)
 
 
 @dataclass(frozen=True, eq=False)

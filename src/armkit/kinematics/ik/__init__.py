@@ -8,6 +8,7 @@ returned q: within the tolerances under the task mask, and within the joint limi
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,8 +93,10 @@ def default_mask(robot: Robot, family: analytic.Family | None = None) -> NDArray
     return as_mask("pose" if robot.n >= 6 else "position")
 
 
+@functools.lru_cache(maxsize=64)
 def reach_bound(robot: Robot) -> float:
-    """An upper bound (m) on the distance from joint 1's axis point to the tool point.
+    """An upper bound (m) on the distance from joint 1's axis point to the tool point (kept
+    per robot: robots are immutable).
 
     Consecutive axis points are fixed in the link between them, so the tool can be no farther
     than the sum of those distances, plus the longest stroke of each prismatic joint.
@@ -221,7 +224,7 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     if numeric_targets.any():
         idx = np.flatnonzero(numeric_targets)
         starts = numeric.seed_starts(robot, flat_T[idx], mask, bound / 10, count=SEEDS,
-                                     samples=min(4096, max(256, 8 * len(idx))), seed=seed)
+                                     seed=seed)
         # The closed form's nearest branch (polishing), or else the given q0, goes first.
         polishing = family is not None and method == "auto"
         if polishing or q0 is not None:
