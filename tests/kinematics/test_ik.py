@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import armkit
 from armkit.errors import InputError
-from armkit.kinematics.ik import analytic, default_mask, ik, ik_solutions
+from armkit.kinematics.ik import analytic, default_mask, ik, ik_solutions, numeric
 from armkit.kinematics.ik.task import as_mask, task_errors
 from armkit.model import DHRow, DHTable, Limits, Robot, ScrewRow, ScrewTable, chain_from_dh
 from armkit.model import chain_from_poe
@@ -316,3 +316,27 @@ def test_bad_targets_and_robots_without_closed_form():
         ik_solutions(ROBOTS["panda"], np.eye(4))
     with pytest.raises(InputError, match="its geometry has no closed form"):
         ik(ROBOTS["tool_changer_6dof"], np.eye(4), method="analytic")
+
+
+@pytest.mark.parametrize("count", [1, 8, 4096])
+def test_seed_starts_are_the_samples_nearest_the_target_around_it(count):
+    """The grid search ranks by features: with every sample wanted it is an exact sort, and
+    the first start is at least as near as every sample in the 27 cells around the target."""
+    robot, mask = ROBOTS["ur5"], as_mask("pose")
+    T = armkit.fk(robot, random_q(robot, 50, seed=3))
+    length = 0.1
+    starts = numeric.seed_starts(robot, T, mask, length, count=count)
+    Q, F, lo, inv, G = numeric._bank(robot, tuple(mask), length, 4096, 0)[:5]
+    wanted = numeric._features(T, mask, length)
+    d = np.sum((wanted[:, None, :] - F[None]) ** 2, axis=-1)                  # (50, 4096)
+    picked = np.sum((wanted[:, None, :] - numeric._features(armkit.fk(robot, starts), mask,
+                                                            length)) ** 2, axis=-1)
+    assert starts.shape == (50, count, robot.n)
+    assert np.all(np.diff(picked, axis=1) >= 0)                                # ranked
+    assert np.all([len(np.unique(s, axis=0)) == count for s in starts])        # distinct
+    if count == 4096:
+        np.testing.assert_allclose(picked, np.sort(d, axis=1), atol=1e-12)
+    cell = lambda p: np.clip(((p - lo) * inv).astype(int), 0, G - 1)          # noqa: E731
+    around = np.abs(cell(T[:, None, :3, 3]) - cell(F[None, :, :3])).max(axis=-1) <= 1
+    assert np.all(picked[:, 0] <= np.where(around, d, np.inf).min(axis=1) + 1e-12)
+    assert np.all(picked[:, 0] >= d.min(axis=1) - 1e-12)
