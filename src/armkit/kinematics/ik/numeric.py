@@ -233,7 +233,8 @@ def workspace(n, m):
             np.empty((4, 4)), np.empty((6, n)), np.empty((4, 4)), np.empty((6, n)),
             np.empty(m), np.empty((m, n)), np.empty(m), np.empty((m, n)),
             np.empty((3, 3)), np.empty(3),
-            np.empty((n, n)), np.empty(n), np.empty((m, m)), np.empty(m), np.empty(m))
+            np.empty((n, n)), np.empty(n), np.empty((m, m)), np.empty(m), np.empty(m),
+            np.empty(STALL_WINDOW))
 
 
 @_jit
@@ -246,11 +247,11 @@ def _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows, 
     ends early.
     """
     n = q.shape[0]
-    _, q_new, dq, free, T, J, T2, J2, e, A, e2, A2, E, w, Hn, gn, Hm, gm, y = ws
+    _, q_new, dq, free, T, J, T2, J2, e, A, e2, A2, E, w, Hn, gn, Hm, gm, y, earlier = ws
     pose_jacobian_one(q, kinds, offsets, pre, links, T, J)
     cost = _residual(T, J, Tt, rows, e, A, E, w)
     lam = 1e-3 if method == LM else 1e-15
-    earlier = np.full(STALL_WINDOW, np.inf)              # the cost 1, 2, 3 iterations ago
+    earlier[:] = np.inf                                 # the cost 1, 2, 3 iterations ago
     for it in range(iterations):
         ep, er = task_errors_one(T, Tt, mask)
         if ep < tol_p and er < tol_r:
