@@ -18,7 +18,7 @@ import typer
 from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
 from armkit.errors import DriveError, ModelFileError
 from armkit.model import Robot
-from armkit.model.files import read_text
+from armkit.io.documents import read_text
 
 MapOption = Annotated[Path | None, typer.Option("--map", help="Register map file (YAML).")]
 RobotOption = Annotated[str | None, typer.Option(

@@ -38,7 +38,7 @@ from armkit import trajectory as tj
 from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, output_folder, print_json, stdout
 from armkit.errors import InputError
 from armkit.model import SI, Robot
-from armkit.model.files import StrictModel, read_yaml, validation_error
+from armkit.io.documents import StrictModel, read_yaml, validation_error
 
 Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
 Limit = float | list[float] | None

@@ -39,7 +39,7 @@ from pydantic import Field, ValidationError
 
 from armkit.errors import ArmkitError, InputError, ModelFileError
 from armkit.model import Robot, joint_array, robot as load_robot_by_name
-from armkit.model.files import StrictModel, read_yaml, validation_error
+from armkit.io.documents import StrictModel, read_yaml, validation_error
 
 MAX_WRITE = 123   # registers in one FC16 request (Modbus application protocol, 6.12)
 MAX_READ = 125    # registers in one FC3 request (6.3)
