@@ -32,6 +32,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import StrictModel, found_text, read_yaml, validation_error
 from armkit.model.chain import Limits
+from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
 from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
 from armkit.model.robot import Robot, Units
@@ -97,6 +98,27 @@ class ScrewJointField(_JointField):
         return self
 
 
+class CollisionShapeField(StrictModel):
+    link: int = Field(ge=0)
+    a: Vector3
+    b: Vector3 | None = None
+    radius: float = Field(gt=0)
+
+
+class CollisionField(StrictModel):
+    """The optional ``collision:`` section (see `armkit.model.collision`), file length unit."""
+
+    radius: float | None = Field(None, gt=0)
+    shapes: list[CollisionShapeField] = []
+    skip: list[Annotated[list[int], Field(min_length=2, max_length=2)]] = []
+
+    @model_validator(mode="after")
+    def _one_kind(self):
+        if self.radius is not None and self.shapes:
+            raise ValueError("expected either radius (default capsules) or shapes, found both")
+        return self
+
+
 class _RobotField(StrictModel):
     name: str
     description: str = ""
@@ -104,6 +126,7 @@ class _RobotField(StrictModel):
     convention: Literal["dh", "mdh", "poe", "urdf"]
     base: PoseField | None = None
     tool: PoseField | None = None
+    collision: CollisionField | None = None
 
 
 class DHFile(_RobotField):
@@ -161,7 +184,27 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
                                  "only fixed rows")
         table = DHTable(rows, convention == "mdh", T_base, T_tool)
         chain = chain_from_dh(table)
-    return Robot(spec.name, chain, units, spec.description, table)
+    collision = _collision(spec.collision, units, chain.n, path)
+    return Robot(spec.name, chain, units, spec.description, table, collision)
+
+
+def _collision(field: CollisionField | None, units: Units, n: int,
+               path: str) -> CollisionSpec | None:
+    """The collision section in SI; links are numbered 0 (base) to n (the last link)."""
+    if field is None:
+        return None
+    for i, s in enumerate(field.shapes):
+        if s.link > n:
+            raise ModelFileError(path, f"collision.shapes[{i}].link", f"a link 0 .. {n}",
+                                 str(s.link))
+    for i, pair in enumerate(field.skip):
+        if not all(0 <= k <= n for k in pair):
+            raise ModelFileError(path, f"collision.skip[{i}]", f"two links 0 .. {n}", str(pair))
+    length = units.length_to_si
+    shapes = tuple(CollisionShape(s.link, length(s.a), length(s.a if s.b is None else s.b),
+                                  float(length(s.radius))) for s in field.shapes)
+    radius = None if field.radius is None else float(length(field.radius))
+    return CollisionSpec(radius, shapes, tuple((int(i), int(j)) for i, j in field.skip))
 
 
 def _pose(pose: PoseField | None, units: Units) -> np.ndarray:
@@ -279,6 +322,22 @@ def robot_document(robot: Robot, folder: str | Path | None = None) -> dict:
                           **({} if r.point is None else
                              {"point": _nums(u.length_from_si(r.point))}),
                           **_limits_doc(r.limits, r.kind, u)} for r in table.rows]
+    if robot.collision is not None:
+        doc["collision"] = _collision_doc(robot.collision, u)
+    return doc
+
+
+def _collision_doc(spec: CollisionSpec, u: Units) -> dict:
+    doc: dict[str, Any] = {}
+    if spec.radius is not None:
+        doc["radius"] = _num(u.length_from_si(spec.radius))
+    if spec.shapes:
+        doc["shapes"] = [{"link": s.link, "a": _nums(u.length_from_si(s.a)),
+                          **({} if np.array_equal(s.a, s.b) else
+                             {"b": _nums(u.length_from_si(s.b))}),
+                          "radius": _num(u.length_from_si(s.radius))} for s in spec.shapes]
+    if spec.skip:
+        doc["skip"] = [list(p) for p in spec.skip]
     return doc
 
 

@@ -71,6 +71,8 @@ class Robot:
     description : str
     table : DHTable, ScrewTable, URDFTable or None
         The source description in SI, kept for display, saving and kinematic calibration.
+    collision : CollisionSpec or None
+        The collision geometry the robot file declares (`armkit.model.collision`), if any.
     """
 
     name: str
@@ -78,6 +80,7 @@ class Robot:
     units: Units = SI
     description: str = ""
     table: object = None
+    collision: object = None
 
     @property
     def n(self) -> int:

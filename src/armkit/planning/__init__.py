@@ -1,0 +1,25 @@
+"""Collision-free path planning in joint space (SPEC.md section 5).
+
+A `Scene` of obstacles (`Box`, `Sphere`, `Cylinder`, `Capsule`), the arm as capsules
+(`ArmGeometry`, from the robot file or its joint origins), a compiled `CollisionChecker` built
+once per robot and scene, planners that take any validity checker (RRT, RRT-Connect, RRT*),
+shortcutting and resampling, and `plan`, which does it all and returns a `PlanResult`.
+
+>>> arm = armkit.robot("inspection_6dof")
+>>> shelf = Scene([Box.from_bounds([0.65, -0.5, 0.2], [1.1, 0.5, 0.24])])
+>>> result = plan(arm, q_start, q_goal, scene=shelf, waypoints=10, seed=1)
+>>> result.success, result.path.shape
+(True, (10, 6))
+"""
+
+from armkit.planning.collision import CollisionChecker, displacement_weights
+from armkit.planning.geometry import ArmGeometry, arm_geometry, default_geometry
+from armkit.planning.plan import PlanResult, goals_from_pose, plan
+from armkit.planning.rrt import ValidityFunction
+from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
+from armkit.planning.smooth import path_length, resample, resample_keeping_vertices, shortcut
+
+__all__ = ["Scene", "Box", "Sphere", "Cylinder", "Capsule", "ArmGeometry", "arm_geometry",
+           "default_geometry", "CollisionChecker", "displacement_weights", "ValidityFunction",
+           "PlanResult", "plan", "goals_from_pose", "shortcut", "resample",
+           "resample_keeping_vertices", "path_length"]
