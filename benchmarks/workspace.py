@@ -26,7 +26,7 @@ import numpy as np
 from distributed import Client, LocalCluster
 
 import armkit
-from armkit.workspace import CHUNK, sampling_limits
+from armkit.sampled_workspace import CHUNK, sampling_limits
 from common import best_of, numpy_chain
 
 ROBOT, RESOLUTION = "inspection_6dof", 0.05

@@ -13,7 +13,7 @@ from armkit.errors import InputError
 from armkit.model import (DHRow, DHTable, Limits, Robot, ScrewRow, ScrewTable, chain_from_dh,
                           chain_from_poe)
 from armkit.spatial import transform
-from armkit.workspace import CHUNK, default_resolution, reach_bound, sampling_limits
+from armkit.sampled_workspace import CHUNK, default_resolution, reach_bound, sampling_limits
 
 H2R = 0.02      # voxel edge for the planar arm; its plane sits mid-layer, at z = H2R / 2
 
