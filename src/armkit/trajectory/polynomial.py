@@ -4,7 +4,7 @@ The quintic between rest states is the inspection-robot paper's law (SPEC.md, R3
 
     q(t) = q0 + (qf - q0) (10 s^3 - 15 s^4 + 6 s^5),   s = t / T.
 
-Both are one-segment cases of `armkit.trajectory.spline`: the cubic meets the end positions and
+Both are one-segment cases of `armkit.spline`: the cubic meets the end positions and
 velocities, the quintic also the end accelerations. All joints share the duration, so they start
 and finish together. Without a duration, the shortest one that keeps every joint within its
 velocity, acceleration and jerk limit is taken, from the laws' peak values
@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.trajectory.piecewise import Trajectory
-from armkit.trajectory.spline import spline
+from armkit.trajectory.splines import spline
 
 # Peak |velocity|, |acceleration|, |jerk| per unit distance at T = 1, rest to rest.
 PEAKS = {"cubic": (1.5, 6.0, 12.0), "quintic": (1.875, 10.0 / np.sqrt(3.0), 60.0)}
