@@ -60,7 +60,7 @@ def test_table1_spline_as_a_path_within_the_robots_limits():
     q = np.zeros((4, 6))
     q[:, [1, 2, 4]] = [[50.4, -180, 130], [43.2, -166, 123], [35, -152, 116], [27, -137, 108]]
     q = robot.q_to_si(q)
-    vmax, amax = robot.chain.velocity_limits, robot.chain.acceleration_limits
+    vmax, amax = robot.velocity_limits, robot.acceleration_limits
     path = spline([0, 2, 4, 5], q, "3-3-3")       # its ends are stationary: q'(s) = 0 there
     tr = retime(path, vmax, amax).trajectory
     reference = toppra.SplineInterpolator([0, 2, 4, 5], q, bc_type="clamped")

@@ -103,6 +103,22 @@ class Robot:
         """Upper position limits (n,), rad or m."""
         return self.chain.upper
 
+    @property
+    def velocity_limits(self) -> NDArray:
+        """Velocity limits (n,), rad/s or m/s; inf where the robot's file gives none."""
+        return self.chain.velocity_limits
+
+    @property
+    def acceleration_limits(self) -> NDArray:
+        """Acceleration limits (n,), rad/s^2 or m/s^2; inf where the robot's file gives none."""
+        return self.chain.acceleration_limits
+
+    @property
+    def sampling_limits(self) -> tuple[NDArray, NDArray]:
+        """Ranges to draw joint values from, (n,) each: the position limits, and one turn for
+        a revolute joint without them (see `Chain.sampling_limits`)."""
+        return self.chain.sampling_limits
+
     def q_to_si(self, q: ArrayLike) -> NDArray:
         """Joint values (..., n) from file units (deg, mm, ...) to rad and m."""
         q = joint_array(self, q)

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.trajectory.piecewise import Trajectory
+from armkit.trajectory.piecewise import Trajectory, at_rest
 from armkit.trajectory.splines import spline
 
 # Peak |velocity|, |acceleration|, |jerk| per unit distance at T = 1, rest to rest.
@@ -98,6 +98,10 @@ def _one_piece(law: str, q0: ArrayLike, qf: ArrayLike, duration: float | None, l
     """The one-segment spline of degree 3 or 5 from q0 to qf with the given end conditions."""
     q0, qf = _ends(q0, qf)
     moving = any(np.any(v) for v in ends.values() if v is not None)
+    if duration is None and not moving and np.array_equal(q0, qf):
+        for name, value in zip(("vmax", "amax", "jmax"), lims):
+            limits(name, value, q0.shape[0])        # still checked
+        return at_rest(q0, law)                     # no motion: nothing to time
     T = _duration(law, q0, qf, duration, lims, moving)
     tr = spline([0.0, T], [q0, qf], 3 if law == "cubic" else 5, **ends)
     return Trajectory(tr.breaks, tr.coefficients, label=law)
