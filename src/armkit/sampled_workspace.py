@@ -467,8 +467,11 @@ def workspace(robot: Robot, n: int, *, seed: int | None = 0, resolution: float |
 
     Example
     -------
-    >>> ws = armkit.workspace(armkit.robot("inspection_6dof"), 1_000_000, resolution=0.05)
-    >>> ws.upper, ws.reach, ws.volume, ws.volume_change
+    >>> ws = armkit.workspace(armkit.robot("inspection_6dof"), 200_000, resolution=0.1)
+    >>> round(ws.reach, 2)              # m: the arm's full reach (1.5620 m), nearly attained
+    1.56
+    >>> round(ws.volume, 1), round(ws.volume_change, 2)    # m^3, and its growth from n/2 to n
+    (13.7, 0.09)
     """
     if not isinstance(robot, Robot):
         raise InputError(f"robot: expected a Robot (see armkit.robot), "

@@ -31,7 +31,7 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
     Example
     -------
     >>> armkit.fk(armkit.robot("ur5"), np.zeros(6))[:3, 3]
-    array([-0.81725, -0.19145, -0.005491])
+    array([-0.81725 , -0.19145 , -0.005491])
     """
     k = robot.chain.kernel
     if (type(q) is np.ndarray and q.shape == k.offsets.shape and q.dtype == np.float64

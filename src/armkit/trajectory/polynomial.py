@@ -85,7 +85,8 @@ def quintic(q0: ArrayLike, qf: ArrayLike, duration: float | None = None, *,
     Example
     -------
     >>> tr = quintic(np.zeros(6), np.deg2rad([30, -45, 60, 0, 90, 0]), 10.0)
-    >>> tr.evaluate(5.0)                       # halfway: half of each move
+    >>> np.rad2deg(tr.evaluate(5.0))           # halfway: half of each move
+    array([ 15. , -22.5,  30. ,   0. ,  45. ,   0. ])
     """
     return _one_piece("quintic", q0, qf, duration, (vmax, amax, jmax),
                       {"start_velocity": start_velocity, "end_velocity": end_velocity,

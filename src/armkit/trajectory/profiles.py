@@ -112,6 +112,7 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
 
     Example
     -------
+    >>> goals = np.random.default_rng(0).uniform(-1.0, 1.0, (1000, 6))
     >>> p = jerk_limited_profile(np.zeros((1000, 6)), goals, 1.0, 2.0, 10.0)
     >>> p.duration.shape
     (1000,)

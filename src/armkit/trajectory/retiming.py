@@ -146,7 +146,7 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
     >>> waypoints = np.deg2rad([[0, 0, 0, 0, 0, 0], [30, -20, 40, 0, 10, 0], [60, 0, 0, 0, 0, 0]])
     >>> timed = retime(waypoints, r.velocity_limits, r.acceleration_limits)
     >>> timed.success, timed.reason, round(timed.duration, 2)
-    (True, 'ok', 1.56)
+    (True, 'ok', 1.89)
     """
     if not isinstance(path, Trajectory):
         path = waypoint_path(path)
