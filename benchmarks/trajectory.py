@@ -31,7 +31,7 @@ import toppra.constraint
 from scipy.interpolate import CubicSpline, make_interp_spline
 
 from armkit.trajectory import jerk_limited, jerk_limited_profile, retime, spline, waypoint_path
-from armkit.trajectory.spline import _System
+from armkit.trajectory.splines import _System
 from common import best_of
 
 logging.getLogger("toppra").setLevel(logging.ERROR)

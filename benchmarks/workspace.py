@@ -26,7 +26,7 @@ import numpy as np
 from distributed import Client, LocalCluster
 
 import armkit
-from armkit.workspace import CHUNK, sampling_limits
+from armkit.sampled_workspace import CHUNK
 from common import best_of, numpy_chain
 
 ROBOT, RESOLUTION = "inspection_6dof", 0.05
@@ -35,7 +35,7 @@ ROBOT, RESOLUTION = "inspection_6dof", 0.05
 def numpy_workspace(robot: armkit.Robot, n: int, seed: int = 0) -> tuple:
     """Bounds, reach and voxel volume the plain NumPy way, on armkit's samples."""
     fk = numpy_chain(robot.table)
-    lower, upper = sampling_limits(robot)
+    lower, upper = robot.sampling_limits
     lo, hi, reach, voxels = np.full(3, np.inf), np.full(3, -np.inf), 0.0, np.empty(0, np.int64)
     for i, start in enumerate(range(0, n, CHUNK)):
         q = np.random.default_rng([seed, i]).uniform(lower, upper, (min(CHUNK, n - start), 6))

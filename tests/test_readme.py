@@ -19,3 +19,21 @@ def test_quick_start_is_two_lines_demo_and_tests():
 
 def test_ci_runs_the_readme_test_command():
     assert quick_start()[1] in (ROOT / ".ci" / "run").read_text().splitlines()
+
+
+def python_blocks() -> list[str]:
+    """Every ```python block of the README, in order."""
+    parts = (ROOT / "README.md").read_text().split("```python\n")[1:]
+    return [part.split("```", 1)[0] for part in parts]
+
+
+def test_readme_python_blocks_run_in_order(monkeypatch):
+    """Each block runs as written, in one namespace, from the repository's root (the paths
+    in the examples are relative to it); a block may use the names of the ones before it."""
+    blocks = python_blocks()
+    assert len(blocks) >= 5
+    monkeypatch.chdir(ROOT)
+    names: dict = {"__name__": "readme"}
+    for number, block in enumerate(blocks, 1):
+        code = compile(block, f"README.md python block {number}", "exec")
+        exec(code, names)               # noqa: S102 - the README's own examples

@@ -13,7 +13,7 @@ from armkit.errors import InputError
 from armkit.model import (DHRow, DHTable, Limits, Robot, ScrewRow, ScrewTable, chain_from_dh,
                           chain_from_poe)
 from armkit.spatial import transform
-from armkit.workspace import CHUNK, default_resolution, reach_bound, sampling_limits
+from armkit.sampled_workspace import CHUNK, default_resolution, reach_bound
 
 H2R = 0.02      # voxel edge for the planar arm; its plane sits mid-layer, at z = H2R / 2
 
@@ -68,7 +68,7 @@ def test_planar_2r_fills_its_annulus():
 
 def test_a_continuous_joint_samples_one_turn():
     robot = planar_2r(continuous=True)
-    lower, upper = sampling_limits(robot)
+    lower, upper = robot.sampling_limits
     np.testing.assert_array_equal([lower, upper], [[-np.pi, -np.pi], [np.pi, np.pi]])
     ws = armkit.workspace(robot, 200_000, resolution=H2R)
     assert ws.radial_reach == pytest.approx(1.5, abs=1e-4)
@@ -84,7 +84,7 @@ def test_tool_changer_reaches_2800_mm_along_x():
     assert 2.7 < ws.upper[0] <= 2.8 and 2.75 < ws.radial_reach <= 2.8
     assert ws.lower[0] >= -2.8 and np.all(np.abs(ws.lower[1:2]) <= 2.8)
     assert 3.25 < ws.upper[2] <= 3.3 and ws.reach <= 3.3
-    assert reach_bound(robot, *sampling_limits(robot)) == pytest.approx(3.3)
+    assert reach_bound(robot, *robot.sampling_limits) == pytest.approx(3.3)
     x = armkit.fk(robot, robot.q_to_si([0, 0, 0, 800, 0, 0]))[0, 3]
     assert x == pytest.approx(2.8)
 
@@ -133,7 +133,7 @@ def test_history_is_the_volume_of_the_first_samples():
 def test_counts_first_samples_and_cloud_agree_with_fk():
     robot = armkit.robot("ur5")
     ws = armkit.workspace(robot, 70_000, chunk=25_000, cloud=30_000, resolution=0.05, seed=3)
-    lower, upper = sampling_limits(robot)
+    lower, upper = robot.sampling_limits
     q = np.concatenate([np.random.default_rng([3, i]).uniform(lower, upper, (25_000, 6))
                         for i in range(2)])[:30_000]
     np.testing.assert_array_equal(ws.cloud, armkit.fk(robot, q)[:, :3, 3])

@@ -6,35 +6,65 @@ SI units inside (m, rad, s); batch-first NumPy arrays, ``q`` of shape ``(..., n)
 >>> ur5 = armkit.robot("ur5")
 >>> armkit.fk(ur5, [0, -1.57, 1.57, 0, 0, 0]).shape
 (4, 4)
+
+Every name below is loaded on first use (PEP 562), so that ``import armkit`` costs little
+more than NumPy: numba, scipy, pydantic, matplotlib, pymodbus and dask are imported only by
+the calls that need them.
 """
 
-from armkit.errors import ArmkitError, DriveError, InputError, ModelFileError
-from armkit.kinematics import (condition_number, fk, fk_frames, jacobian, jacobian_analytic,
-                               jacobian_dot, manipulability, min_singular_value,
-                               singular_values, tool_acceleration, tool_velocity)
-from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
-from armkit.model import Robot, load_robot, robot, robots, save_robot
-from armkit.trajectory import (Trajectory, cubic, jerk_limited, quintic, retime, spline,
-                               tool_motion, trapezoidal)
-from armkit.workspace import Section, Workspace, workspace
+from __future__ import annotations
 
-# Loaded on first use, so that `import armkit` does not pay for pymodbus (about 0.1 s).
-_DRIVES = ("load_register_map", "check_waypoints", "send_waypoints", "DriveClient", "SimDrive")
+import importlib
+from typing import TYPE_CHECKING
+
+from armkit.errors import ArmkitError, DriveError, InputError, ModelFileError
+
+# name -> the module that defines it
+_HOMES = {
+    **dict.fromkeys(("fk", "fk_frames"), "armkit.kinematics.forward"),
+    **dict.fromkeys(("jacobian", "jacobian_analytic", "jacobian_dot", "tool_velocity",
+                     "tool_acceleration", "singular_values", "manipulability",
+                     "min_singular_value", "condition_number"), "armkit.kinematics.jacobian"),
+    **dict.fromkeys(("ik", "ik_solutions", "IKResult", "IKSolutions"), "armkit.kinematics.ik"),
+    **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.model.files"),
+    "Robot": "armkit.model.robot",
+    **dict.fromkeys(("Trajectory", "cubic", "quintic", "jerk_limited", "trapezoidal", "retime",
+                     "spline", "tool_motion", "RetimeResult"), "armkit.trajectory"),
+    **dict.fromkeys(("Section", "Workspace", "workspace"), "armkit.sampled_workspace"),
+    **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
+    **dict.fromkeys(("load_register_map", "check_waypoints", "send_waypoints", "DriveClient",
+                     "SimDrive"), "armkit.drives"),
+}
+
+if TYPE_CHECKING:       # what the names are, for readers and type checkers
+    from armkit.drives import (DriveClient, SimDrive, check_waypoints, load_register_map,
+                               send_waypoints)
+    from armkit.kinematics.forward import fk, fk_frames
+    from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
+    from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,
+                                            jacobian_dot, manipulability, min_singular_value,
+                                            singular_values, tool_acceleration, tool_velocity)
+    from armkit.model.files import load_robot, robot, robots, save_robot
+    from armkit.model.robot import Robot
+    from armkit.sampled_workspace import Section, Workspace, workspace
+    from armkit.threads import get_num_threads, set_num_threads
+    from armkit.trajectory import (RetimeResult, Trajectory, cubic, jerk_limited, quintic,
+                                   retime, spline, tool_motion, trapezoidal)
 
 
 def __getattr__(name: str):
-    if name in _DRIVES:
-        import armkit.drives
-        return getattr(armkit.drives, name)
-    raise AttributeError(f"module 'armkit' has no attribute {name!r}")
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'armkit' has no attribute {name!r}")
+    value = getattr(importlib.import_module(home), name)
+    globals()[name] = value             # later look-ups are plain attribute reads
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOMES))
 
 
 __version__ = "0.1.0"
 
-__all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot", "robot",
-           "robots", "load_robot", "save_robot", "fk", "fk_frames", "jacobian",
-           "jacobian_analytic", "jacobian_dot", "tool_velocity", "tool_acceleration",
-           "singular_values", "manipulability", "min_singular_value", "condition_number",
-           "ik", "ik_solutions", "IKResult", "IKSolutions", "Trajectory", "cubic", "quintic",
-           "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", "workspace",
-           "Workspace", "Section", *_DRIVES]
+__all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", *_HOMES]

@@ -18,9 +18,11 @@ import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 from armkit.errors import InputError
+
+# scipy's Rotation is imported inside the functions that use it: it costs about 0.2 s, which
+# loading a robot file or computing a pose error need not pay.
 
 
 def as_array(x: ArrayLike, name: str, tail: tuple[int, ...]) -> NDArray:
@@ -145,20 +147,31 @@ def skew(v: ArrayLike) -> NDArray:
 
 # --- rotation parametrisations, through scipy's Rotation ----------------------------------------
 
-def _from_scipy(rot: Rotation, lead: tuple[int, ...]) -> NDArray:
+def _from_scipy(rot, lead: tuple[int, ...]) -> NDArray:
     return rot.as_matrix().reshape(lead + (3, 3))
 
 
-def _to_scipy(R: ArrayLike) -> tuple[Rotation, tuple[int, ...]]:
+def _to_scipy(R: ArrayLike):
+    from scipy.spatial.transform import Rotation
+
     R = np.asarray(R, dtype=float)
     return Rotation.from_matrix(R.reshape(-1, 3, 3)), R.shape[:-2]
 
 
 def rpy_to_matrix(rpy: ArrayLike, *, degrees: bool = False) -> NDArray:
-    """Rotation from roll, pitch, yaw: ``Rz(y) @ Ry(p) @ Rx(r)``; rpy (..., 3) -> (..., 3, 3)."""
+    """Rotation from roll, pitch, yaw: ``Rz(y) @ Ry(p) @ Rx(r)``; rpy (..., 3) -> (..., 3, 3).
+
+    Example
+    -------
+    >>> rpy_to_matrix([0.0, 0.0, np.pi / 2]).round(12) + 0.0
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.],
+           [ 0.,  0.,  1.]])
+    """
     rpy = np.asarray(rpy, dtype=float)
-    return _from_scipy(Rotation.from_euler("xyz", rpy.reshape(-1, 3), degrees=degrees),
-                       rpy.shape[:-1])
+    if degrees:
+        rpy = np.deg2rad(rpy)
+    return rotz(rpy[..., 2]) @ roty(rpy[..., 1]) @ rotx(rpy[..., 0])
 
 
 def matrix_to_rpy(R: ArrayLike, *, degrees: bool = False) -> NDArray:
@@ -175,6 +188,8 @@ def matrix_to_rpy(R: ArrayLike, *, degrees: bool = False) -> NDArray:
 
 def quat_to_matrix(quat: ArrayLike, *, scalar_first: bool = False) -> NDArray:
     """Rotation from unit quaternions (..., 4), ``(x, y, z, w)`` by default -> (..., 3, 3)."""
+    from scipy.spatial.transform import Rotation
+
     quat = np.asarray(quat, dtype=float)
     return _from_scipy(Rotation.from_quat(quat.reshape(-1, 4), scalar_first=scalar_first),
                        quat.shape[:-1])
@@ -187,33 +202,70 @@ def matrix_to_quat(R: ArrayLike, *, scalar_first: bool = False) -> NDArray:
 
 
 def exp_so3(rotvec: ArrayLike) -> NDArray:
-    """Rotation from a rotation vector (axis times angle, rad): (..., 3) -> (..., 3, 3)."""
-    rotvec = np.asarray(rotvec, dtype=float)
-    return _from_scipy(Rotation.from_rotvec(rotvec.reshape(-1, 3)), rotvec.shape[:-1])
+    """Rotation from a rotation vector (axis times angle, rad): (..., 3) -> (..., 3, 3).
+
+    Rodrigues' formula ``I + sin(t)/t [w] + (1 - cos t)/t^2 [w]^2``, ``t = |w|``, with the
+    Taylor series of both factors at small t.
+    """
+    w = np.asarray(rotvec, dtype=float)
+    t = np.linalg.norm(w, axis=-1)[..., None, None]
+    W = skew(w)
+    a = _series(t, lambda t: np.sin(t) / t, lambda t: 1.0 - t**2 / 6)
+    b = _series(t, lambda t: 2 * (np.sin(t / 2) / t) ** 2, lambda t: 0.5 - t**2 / 24)
+    return np.eye(3) + a * W + b * (W @ W)
+
+
+def _vee_and_angle(R: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    """``vee(R - R^T)`` (..., 3) (twice the sine times the axis), the cosine and the angle."""
+    s = np.stack([R[..., 2, 1] - R[..., 1, 2],
+                  R[..., 0, 2] - R[..., 2, 0],
+                  R[..., 1, 0] - R[..., 0, 1]], axis=-1)
+    c = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
+    return s, c, np.arctan2(0.5 * np.linalg.norm(s, axis=-1), c)
+
+
+def rotation_angle(R: ArrayLike) -> NDArray:
+    """Angle (rad, in [0, pi]) of rotations (..., 3, 3): the length of `log_so3`.
+
+    Uses ``atan2(|vee(R - R^T)| / 2, (trace - 1) / 2)``: accurate at every angle, unlike
+    ``arccos`` of the trace, which loses half the digits near 0 (a 1e-9 rad error reads as 0).
+
+    Example
+    -------
+    >>> float(rotation_angle(rotx(1e-9)))
+    1e-09
+    """
+    return _vee_and_angle(np.asarray(R, dtype=float))[2]
 
 
 def log_so3(R: ArrayLike) -> NDArray:
     """Rotation vector (..., 3) of rotations (..., 3, 3); angle in [0, pi].
 
-    Goes through the quaternion (Shepperd's method in scipy), which stays accurate near
-    angle pi, where the skew part of R vanishes and its usual log formula breaks down.
-    """
-    rot, lead = _to_scipy(R)
-    return rot.as_rotvec().reshape(lead + (3,))
+    The angle is `rotation_angle`'s. Up to pi/2 the axis is ``vee(R - R^T)`` scaled by
+    ``angle / (2 sin angle)`` (its series below 1e-6 rad); past pi/2, where that skew part
+    shrinks towards zero, it is the largest column of ``(R + R^T)/2 - cos(angle) I``, which
+    equals ``(1 - cos angle) a a^T`` for the unit axis a, signed by the skew part. Both stay
+    accurate to rounding over their range.
 
-
-def rotation_angle(R: ArrayLike) -> NDArray:
-    """Angle (rad, in [0, pi]) of rotations (..., 3, 3).
-
-    Uses ``atan2(|vee(R - R^T)| / 2, (trace - 1) / 2)``: accurate at every angle, unlike
-    ``arccos`` of the trace, which loses half the digits near 0 (a 1e-9 rad error reads as 0).
+    Example
+    -------
+    >>> log_so3(rotz(0.5)).round(12) + 0.0
+    array([0. , 0. , 0.5])
     """
     R = np.asarray(R, dtype=float)
-    s = 0.5 * np.stack([R[..., 2, 1] - R[..., 1, 2],
-                        R[..., 0, 2] - R[..., 2, 0],
-                        R[..., 1, 0] - R[..., 0, 1]], axis=-1)
-    c = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
-    return np.arctan2(np.linalg.norm(s, axis=-1), c)
+    s, c, angle = _vee_and_angle(R)
+    sine = 0.5 * np.linalg.norm(s, axis=-1)
+    wide = angle > 0.5 * np.pi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.where(angle < 1e-6, 0.5 * (1.0 + angle * angle / 6.0), angle / (2.0 * sine))
+        w = f[..., None] * s
+    if np.any(wide):
+        B = 0.5 * (R[wide] + np.swapaxes(R[wide], -1, -2)) - c[wide][:, None, None] * np.eye(3)
+        k = np.argmax(np.diagonal(B, axis1=-2, axis2=-1), axis=-1)
+        v = np.take_along_axis(B, k[:, None, None], axis=-1)[..., 0]     # column k
+        sign = np.where(np.einsum("...i,...i", v, s[wide]) >= 0.0, 1.0, -1.0)
+        w[wide] = (sign * angle[wide] / np.linalg.norm(v, axis=-1))[:, None] * v
+    return w
 
 
 def pose_from_xyz_rpy(xyz: ArrayLike, rpy: ArrayLike, *, degrees: bool = False) -> NDArray:

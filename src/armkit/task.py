@@ -21,7 +21,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
-from armkit.model import Robot, robot as load
+from armkit.model import Robot
+from armkit.model.files import robot as load
 from armkit.spatial import pose_from_xyz_rpy
 from armkit.trajectory import Trajectory, quintic
 

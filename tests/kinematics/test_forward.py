@@ -25,12 +25,32 @@ def test_leading_shapes_match_single_calls(any_robot, lead):
 
 def test_serial_and_parallel_kernels_agree():
     robot = armkit.robot("panda")
-    Q = random_q(robot, _kernels.PARALLEL_FROM + 5)
+    Q = random_q(robot, 2 * _kernels.GRAIN + 5)
     k = robot.chain.kernel
     a, b = np.empty((len(Q), 4, 4)), np.empty((len(Q), 4, 4))
     _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, a)
     _kernels.poses_parallel(Q, k.kinds, k.offsets, k.pre, k.links, b)
     np.testing.assert_array_equal(a, b)
+
+
+def test_thread_count_changes_nothing_but_speed():
+    robot = armkit.robot("ur5")
+    Q = random_q(robot, 3 * _kernels.GRAIN)
+    try:
+        armkit.set_num_threads(1)
+        one = armkit.fk(robot, Q), armkit.jacobian(robot, Q)
+        armkit.set_num_threads(2)
+        two = armkit.fk(robot, Q), armkit.jacobian(robot, Q)
+    finally:
+        armkit.set_num_threads(None)
+    np.testing.assert_array_equal(one[0], two[0])
+    np.testing.assert_array_equal(one[1], two[1])
+
+
+@pytest.mark.parametrize("n", [0, -1, 1.5, True, "2", 10_000])
+def test_bad_thread_counts_are_refused(n):
+    with pytest.raises(InputError, match=r"n: expected a whole number of threads 1 \.\. \d+"):
+        armkit.set_num_threads(n)
 
 
 def test_rotation_stays_orthonormal_over_a_large_batch():
@@ -53,7 +73,10 @@ def test_accepts_lists_and_integer_arrays():
     (1.0, "found a scalar"),
     ([0, 0, np.nan, 0, 0, 0], "q: expected finite joint values, found NaN or inf"),
     (np.full((100, 6), np.inf), "NaN or inf"),
-    ("abc", "q: expected numbers, found str"),
+    ("abc", "q: expected real joint values, found text"),
+    (np.zeros(6, complex), "q: expected real joint values, found complex numbers"),
+    (np.ones(6, bool), "q: expected real joint values, found booleans"),
+    ([True, False, True, True, True, True], "found booleans"),
 ])
 def test_bad_q_is_refused_with_its_reason(q, words):
     with pytest.raises(InputError) as err:

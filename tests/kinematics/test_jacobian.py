@@ -143,3 +143,38 @@ def test_bad_arguments():
         armkit.manipulability(robot, np.zeros(6), axes=[True, False])
     with pytest.raises(InputError, match="qd: expected last axis 6"):
         armkit.jacobian_dot(robot, np.zeros(6), np.zeros(5))
+
+
+def test_large_batches_stream_block_by_block_to_the_same_values(monkeypatch):
+    """Results computed block by block (bounded memory) equal those of one pass."""
+    from armkit.kinematics import jacobian as module
+
+    robot = armkit.robot("ur5")
+    rng = np.random.default_rng(3)
+    q = rng.uniform(robot.lower, robot.upper, (5, 7, 6))
+    qd, qdd = rng.normal(size=(2, 5, 7, 6))
+    calls = {name: getattr(armkit, name) for name in (
+        "manipulability", "singular_values", "min_singular_value", "condition_number",
+        "jacobian_analytic")}
+    whole = {name: f(robot, q) for name, f in calls.items()}
+    whole["tool"] = armkit.jacobian(robot, q, frame="tool")
+    whole["Jdot"] = armkit.jacobian_dot(robot, q, qd)
+    whole["velocity"] = armkit.tool_velocity(robot, q, qd)
+    whole["acceleration"] = armkit.tool_acceleration(robot, q, qd, qdd)
+    monkeypatch.setattr(module, "STREAM", 4)            # 35 configurations: 9 blocks
+    blocks = {name: f(robot, q) for name, f in calls.items()}
+    blocks["tool"] = armkit.jacobian(robot, q, frame="tool")
+    blocks["Jdot"] = armkit.jacobian_dot(robot, q, qd)
+    blocks["velocity"] = armkit.tool_velocity(robot, q, qd)
+    blocks["acceleration"] = armkit.tool_acceleration(robot, q, qd, qdd)
+    for name, value in whole.items():
+        assert blocks[name].shape == value.shape, name
+        np.testing.assert_allclose(blocks[name], value, rtol=0, atol=1e-12, err_msg=name)
+
+
+def test_rate_arrays_broadcast_against_q():
+    robot = armkit.robot("ur5")
+    q = np.random.default_rng(4).uniform(robot.lower, robot.upper, (3, 6))
+    v = armkit.tool_velocity(robot, q, np.ones(6))
+    assert v.shape == (3, 6)
+    np.testing.assert_allclose(v[1], armkit.jacobian(robot, q[1]) @ np.ones(6), atol=1e-15)

@@ -128,3 +128,27 @@ def test_a_changed_robot_is_a_new_robot():
     assert armkit.fk(moved, q)[2, 3] == pytest.approx(armkit.fk(ur5, q)[2, 3] + 1.0)
     with pytest.raises(ValueError):
         ur5.chain.lower[0] = 0.0                                 # arrays are read-only
+
+
+def test_robot_exposes_its_limits():
+    robot = armkit.robot("water_supply")
+    for name in ("velocity_limits", "acceleration_limits"):
+        np.testing.assert_array_equal(getattr(robot, name), getattr(robot.chain, name))
+        assert getattr(robot, name).shape == (robot.n,)
+    lower, upper = robot.sampling_limits
+    np.testing.assert_array_equal(lower, robot.lower)
+    np.testing.assert_array_equal(upper, robot.upper)
+
+
+def test_no_module_is_hidden_by_a_function_of_its_name():
+    import importlib
+    import types
+
+    for name in ("armkit.model.robot", "armkit.kinematics.jacobian", "armkit.kinematics.forward",
+                 "armkit.sampled_workspace", "armkit.trajectory.splines",
+                 "armkit.trajectory.retiming", "armkit.trajectory.profiles"):
+        module = importlib.import_module(name)
+        parent, _, leaf = name.rpartition(".")
+        assert isinstance(getattr(importlib.import_module(parent), leaf), types.ModuleType), name
+        assert getattr(importlib.import_module(parent), leaf) is module
+    assert callable(armkit.robot) and callable(armkit.workspace) and callable(armkit.jacobian)

@@ -69,7 +69,7 @@ def test_quintic_duration_from_a_jerk_limit():
 
 @pytest.mark.parametrize("call, words", [
     (lambda: quintic(Q0, QF), "duration: expected a duration, or limits"),
-    (lambda: quintic(Q0, Q0, vmax=1.0), "duration: expected a duration, or limits"),
+    (lambda: quintic(Q0, Q0, vmax=-1.0), "vmax: expected positive limits"),
     (lambda: quintic(Q0, QF, -1.0), "duration: expected a positive number"),
     (lambda: quintic(Q0, QF, start_velocity=1.0, vmax=1.0), "end velocity or acceleration"),
     (lambda: cubic(Q0, QF[:3], 1.0), "q0, qf: expected two arrays of shape"),

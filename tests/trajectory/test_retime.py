@@ -44,7 +44,7 @@ def test_waypoint_path_duration_against_toppra():
     waypoints = rng.uniform(-1.5, 1.5, (10, 6))
     vmax, amax = rng.uniform(0.5, 2.0, 6), rng.uniform(1.0, 4.0, 6)
     path = waypoint_path(waypoints)
-    tr = retime(path, vmax, amax)
+    tr = retime(path, vmax, amax).trajectory
     # toppra's own spline through the same waypoints at the same path parameters.
     reference = toppra.SplineInterpolator(path.knots, waypoints, bc_type="natural")
     theirs = toppra_duration(reference, np.linspace(0, path.end, 3001), vmax, amax)
@@ -60,13 +60,13 @@ def test_table1_spline_as_a_path_within_the_robots_limits():
     q = np.zeros((4, 6))
     q[:, [1, 2, 4]] = [[50.4, -180, 130], [43.2, -166, 123], [35, -152, 116], [27, -137, 108]]
     q = robot.q_to_si(q)
-    vmax, amax = robot.chain.velocity_limits, robot.chain.acceleration_limits
+    vmax, amax = robot.velocity_limits, robot.acceleration_limits
     path = spline([0, 2, 4, 5], q, "3-3-3")       # its ends are stationary: q'(s) = 0 there
-    tr = retime(path, vmax, amax)
+    tr = retime(path, vmax, amax).trajectory
     reference = toppra.SplineInterpolator([0, 2, 4, 5], q, bc_type="clamped")
     theirs = toppra_duration(reference, np.linspace(0, 5, 1001), vmax, amax)
     assert theirs * 0.99 < tr.duration < theirs                       # target: within 1 %
-    finer = retime(path, vmax, amax, grid=4000)
+    finer = retime(path, vmax, amax, grid=4000).trajectory
     assert tr.duration == pytest.approx(finer.duration, rel=1e-3)     # converged already
     check_limits_and_path(tr, path, vmax, amax)
     assert tr.label == "retimed" and tr.knots.shape == (4,)
@@ -74,8 +74,8 @@ def test_table1_spline_as_a_path_within_the_robots_limits():
 
 def test_a_velocity_limit_alone_with_a_slow_acceleration_limit():
     path = waypoint_path([[0.0, 0.0], [1.0, 0.5], [2.0, 0.0]])
-    fast = retime(path, vmax=[np.inf, np.inf], amax=10.0)
-    slow = retime(path, vmax=0.2, amax=10.0)
+    fast = retime(path, vmax=[np.inf, np.inf], amax=10.0).trajectory
+    slow = retime(path, vmax=0.2, amax=10.0).trajectory
     assert slow.duration > fast.duration
     check_limits_and_path(slow, path, np.full(2, 0.2), np.full(2, 10.0))
 
@@ -101,4 +101,10 @@ def test_limits_hold_for_random_paths(seed, count):
     rng = np.random.default_rng(seed)
     path = waypoint_path(rng.uniform(-2, 2, (count, 3)))
     vmax, amax = rng.uniform(0.1, 3.0, 3), rng.uniform(0.1, 10.0, 3)
-    check_limits_and_path(retime(path, vmax, amax, grid=300), path, vmax, amax)
+    check_limits_and_path(retime(path, vmax, amax, grid=300).trajectory, path, vmax, amax)
+
+
+def test_a_followed_path_reports_success():
+    result = retime([[0.0, 0.0], [1.0, 1.0]], vmax=1.0, amax=1.0)
+    assert result.success and result.reason == "ok" and np.isnan(result.stop)
+    assert result.duration == result.trajectory.duration > 0

@@ -224,8 +224,13 @@ class DriveClient:
 
     Example
     -------
-    >>> with DriveClient(load_register_map("drive.map.yaml"), "192.168.0.10") as drive:
-    ...     drive.send(q, t)        # q (N, n) in rad/m, t (N,) in s
+    >>> from importlib import resources
+    >>> from armkit.drives import SimDrive, load_register_map
+    >>> drive_map = load_register_map(resources.files("armkit.drives") / "inspection_6dof.map.yaml")
+    >>> q = np.deg2rad([[0, 0, 0, 0, 0, 0], [5, 5, 5, 5, 5, 5]])     # (N, n) in rad/m
+    >>> with SimDrive(drive_map) as sim, DriveClient(drive_map, port=sim.port) as drive:
+    ...     drive.send(q, [0.0, 1.0]).last_accepted                    # t (N,) in s
+    1
     """
 
     def __init__(self, register_map: RegisterMap, host: str = "127.0.0.1", port: int = 502, *,

@@ -38,7 +38,8 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import Field, ValidationError
 
 from armkit.errors import ArmkitError, InputError, ModelFileError
-from armkit.model import Robot, joint_array, robot as load_robot_by_name
+from armkit.model import Robot, joint_array
+from armkit.model.files import robot as load_robot_by_name
 from armkit.io.documents import StrictModel, read_yaml, validation_error
 
 MAX_WRITE = 123   # registers in one FC16 request (Modbus application protocol, 6.12)

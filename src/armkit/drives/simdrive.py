@@ -22,8 +22,12 @@ corrupt     at waypoint write ``at``: store the first register of the block with
             flipped (a read-back mismatch)
 ==========  =====================================================================================
 
->>> with SimDrive(load_register_map("drive.map.yaml")) as sim:     # port 0: a free port
-...     send_waypoints(sim.map, q, port=sim.port)
+>>> from importlib import resources
+>>> from armkit.drives import load_register_map, send_waypoints
+>>> drive_map = load_register_map(resources.files("armkit.drives") / "inspection_6dof.map.yaml")
+>>> with SimDrive(drive_map) as sim:                               # port 0: a free port
+...     send_waypoints(sim.map, np.zeros((1, 6)), port=sim.port).waypoints
+1
 """
 
 from __future__ import annotations

@@ -3,9 +3,17 @@
 A chain reaches the kernels as `KernelChain`: joint i turns about (or slides along) z of the
 frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion. A pose is carried
 as 12 scalars (rotation rows and position) so that the whole product stays in registers; the
-batch loops come twice, serial for small batches (no thread start-up) and parallel.
+batch loops come twice, serial and parallel, and `run` picks one by the batch's size and the
+idle cores (`armkit.threads`).
 
-benchmarks/fk.py measures these against a vectorised NumPy chain and roboticstoolbox's C++ code.
+Compilation is lazy (no explicit signatures, which would compile every kernel, the parallel
+ones included, when this module is imported): a call compiles only the kernels it runs, and a
+single configuration from Python calls a `_one` kernel directly, so it never compiles a batch
+loop. The small helpers are inlined into their callers at numba's IR level, which saves a
+separate compilation (and cache file) for each of them.
+
+benchmarks/fk.py measures these against a vectorised NumPy chain, roboticstoolbox's C++ code
+and pinocchio; benchmarks/startup.py measures what the first call costs.
 """
 
 from __future__ import annotations
@@ -15,20 +23,24 @@ import math
 import numba
 import numpy as np
 
+from armkit.threads import threads_for
+
 _jit = numba.njit(cache=True, nogil=True)
+_inline = numba.njit(inline="always")
 _pjit = numba.njit(cache=True, nogil=True, parallel=True)
 
-PARALLEL_FROM = 2048        # samples; below this, thread start-up costs more than it saves
+GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: below this, the
+#                     start-up of a second thread costs more than the half batch it takes)
 
 
-@_jit
+@_inline
 def _start(pre):
     return (pre[0, 0], pre[0, 1], pre[0, 2], pre[0, 3],
             pre[1, 0], pre[1, 1], pre[1, 2], pre[1, 3],
             pre[2, 0], pre[2, 1], pre[2, 2], pre[2, 3])
 
 
-@_jit
+@_inline
 def _move(T, kind, value):
     """T @ Rz(value) for a revolute joint, T @ Tz(value) for a prismatic one."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
@@ -42,7 +54,7 @@ def _move(T, kind, value):
             r20, r21, r22, p2 + value * r22)
 
 
-@_jit
+@_inline
 def _then(T, C):
     """T @ C for a constant rigid transform C (4, 4)."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
@@ -60,7 +72,7 @@ def _then(T, C):
             r20 * C[0, 3] + r21 * C[1, 3] + r22 * C[2, 3] + p2)
 
 
-@_jit
+@_inline
 def _store(T, out):
     """Write the 12-scalar pose T into out (4, 4)."""
     for k in range(12):
@@ -73,11 +85,14 @@ def _store(T, out):
 
 @_jit
 def pose_one(q, kinds, offsets, pre, links, out):
-    """Tool pose of one configuration q (n,) into out (4, 4)."""
+    """Tool pose of one configuration q (n,) into out (4, 4); False if q is not finite."""
     T = _start(pre)
+    finite = True
     for i in range(q.shape[0]):
+        finite &= math.isfinite(q[i])
         T = _then(_move(T, kinds[i], q[i] + offsets[i]), links[i])
     _store(T, out)
+    return finite
 
 
 @_jit
@@ -96,11 +111,13 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, out, J):
     """Tool pose into out (4, 4) and the geometric Jacobian (6, n), base frame, into J.
 
     Column i: revolute ``(z_i x (p - o_i), z_i)``, prismatic ``(z_i, 0)``; z_i the joint axis,
-    o_i a point on it, p the tool origin.
+    o_i a point on it, p the tool origin. Returns False if q is not finite.
     """
     n = q.shape[0]
     T = _start(pre)
+    finite = True
     for i in range(n):
+        finite &= math.isfinite(q[i])
         T = _move(T, kinds[i], q[i] + offsets[i])
         J[0, i], J[1, i], J[2, i] = T[3], T[7], T[11]          # o_i, for now
         J[3, i], J[4, i], J[5, i] = T[2], T[6], T[10]          # z_i
@@ -117,6 +134,7 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, out, J):
             J[0, i], J[1, i], J[2, i] = zx, zy, zz
             J[3, i], J[4, i], J[5, i] = 0.0, 0.0, 0.0
     _store(T, out)
+    return finite
 
 
 # --- batch loops: Q (N, n) -> outputs with leading N ------------------------------------------
@@ -158,5 +176,15 @@ def pose_jacobians_parallel(Q, kinds, offsets, pre, links, out, J):
 
 
 def run(serial, parallel, Q: np.ndarray, *args) -> None:
-    """Call the serial or parallel batch loop, whichever suits the batch size."""
-    (parallel if Q.shape[0] >= PARALLEL_FROM else serial)(Q, *args)
+    """Call the serial batch loop, or the parallel one on as many threads as the batch's size
+    and the idle cores are worth (`armkit.threads.threads_for`)."""
+    threads = threads_for(Q.shape[0], GRAIN)
+    if threads == 1:
+        serial(Q, *args)
+        return
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))   # this thread only
+    try:
+        parallel(Q, *args)
+    finally:
+        numba.set_num_threads(before)

@@ -31,12 +31,19 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
     Example
     -------
     >>> armkit.fk(armkit.robot("ur5"), np.zeros(6))[:3, 3]
-    array([-0.81725, -0.19145, -0.005491])
+    array([-0.81725 , -0.19145 , -0.005491])
     """
+    k = robot.chain.kernel
+    if (type(q) is np.ndarray and q.shape == k.offsets.shape and q.dtype == np.float64
+            and q.flags.c_contiguous):
+        # One configuration from Python: straight to the kernel, which also checks finiteness
+        # (a non-finite q falls through to joint_array, which says what is wrong).
+        out = np.empty((4, 4))
+        if _kernels.pose_one(q, k.kinds, k.offsets, k.pre, k.links, out):
+            return out
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     out = np.empty((flat.shape[0], 4, 4))
-    k = robot.chain.kernel
     _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.kinds, k.offsets, k.pre,
                  k.links, out)
     return out.reshape(q.shape[:-1] + (4, 4))

@@ -20,14 +20,37 @@ from armkit.spatial import matrix_to_rpy
 Frame = Literal["base", "tool"]
 Axes = Literal["all", "trans", "rot"]
 
+STREAM = 1 << 15    # configurations per block when a result is computed block by block
+
+
+def streamed(compute, q: NDArray, tail: tuple[int, ...]) -> NDArray:
+    """``compute(q)`` block by block over the leading axes of `q` (..., n), into one result
+    (..., *tail): the temporaries of `compute` (poses, Jacobians, SVDs) stay the size of one
+    block, so the peak memory is the result's plus a bounded amount.
+    """
+    lead = q.shape[:-1]
+    flat = q.reshape(-1, q.shape[-1])
+    if flat.shape[0] <= STREAM:
+        return compute(flat).reshape(lead + tail)
+    out = np.empty((flat.shape[0],) + tail)
+    for start in range(0, flat.shape[0], STREAM):
+        out[start:start + STREAM] = compute(flat[start:start + STREAM])
+    return out.reshape(lead + tail)
+
 
 def pose_and_jacobian(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     """Tool pose (..., 4, 4) and geometric Jacobian in the base frame (..., 6, n), one pass."""
+    k = robot.chain.kernel
+    if (type(q) is np.ndarray and q.shape == k.offsets.shape and q.dtype == np.float64
+            and q.flags.c_contiguous):
+        # One configuration from Python: straight to the kernel, which checks finiteness.
+        T, J = np.empty((4, 4)), np.empty((6, q.shape[0]))
+        if _kernels.pose_jacobian_one(q, k.kinds, k.offsets, k.pre, k.links, T, J):
+            return T, J
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     T = np.empty((flat.shape[0], 4, 4))
     J = np.empty((flat.shape[0], 6, robot.n))
-    k = robot.chain.kernel
     _kernels.run(_kernels.pose_jacobians, _kernels.pose_jacobians_parallel, flat, k.kinds,
                  k.offsets, k.pre, k.links, T, J)
     lead = q.shape[:-1]
@@ -59,10 +82,12 @@ def jacobian(robot: Robot, q: ArrayLike, frame: Frame = "base") -> NDArray:
     InputError
         If the last axis of q is not robot.n, or frame is not "base" or "tool".
     """
-    if frame not in ("base", "tool"):
+    if frame == "base":
+        return pose_and_jacobian(robot, q)[1]
+    if frame != "tool":
         raise InputError(f"frame: expected 'base' or 'tool', found {frame!r}")
-    T, J = pose_and_jacobian(robot, q)
-    return J if frame == "base" else _in_tool_frame(T, J)
+    return streamed(lambda b: _in_tool_frame(*pose_and_jacobian(robot, b)),
+                    joint_array(robot, q), (6, robot.n))
 
 
 def rpy_rate_matrix(rpy: ArrayLike) -> NDArray:
@@ -90,7 +115,11 @@ def jacobian_analytic(robot: Robot, q: ArrayLike) -> NDArray:
         ``R = Rz(yaw) Ry(pitch) Rx(roll)``. At pitch = +-pi/2 the rpy rates do not exist and
         rows 3-5 are NaN.
     """
-    T, J = pose_and_jacobian(robot, q)
+    return streamed(lambda b: _analytic(*pose_and_jacobian(robot, b)), joint_array(robot, q),
+                    (6, robot.n))
+
+
+def _analytic(T: NDArray, J: NDArray) -> NDArray:
     rpy = matrix_to_rpy(T[..., :3, :3])
     E = rpy_rate_matrix(rpy)
     # det E = cos(pitch); below this the rates are undefined (gimbal lock), not just large.
@@ -121,6 +150,12 @@ def jacobian_dot(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray:
     ``(dz x (p - o) + z x (dp - do), dz)`` and a prismatic column ``(z, 0)`` has ``(dz, 0)``.
     """
     q, qd = np.broadcast_arrays(joint_array(robot, q), joint_array(robot, qd, "qd"))
+    both = np.concatenate([q, qd], axis=-1)         # one array to stream block by block
+    n = robot.n
+    return streamed(lambda b: _jacobian_dot(robot, b[:, :n], b[:, n:]), both, (6, n))
+
+
+def _jacobian_dot(robot: Robot, q: NDArray, qd: NDArray) -> NDArray:
     moved, T = joint_frames(robot, q)
     z, o, p = moved[..., :3, 2], moved[..., :3, 3], T[..., :3, 3]
     revolute = robot.chain.revolute
@@ -147,8 +182,10 @@ def jacobian_dot(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray:
 
 def tool_velocity(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray:
     """Tool twist ``J qd`` (..., 6) in the base frame: linear (m/s), then angular (rad/s)."""
-    qd = joint_array(robot, qd, "qd")
-    return (jacobian(robot, q) @ qd[..., None])[..., 0]
+    q, qd = np.broadcast_arrays(joint_array(robot, q), joint_array(robot, qd, "qd"))
+    n = robot.n
+    return streamed(lambda b: (jacobian(robot, b[:, :n]) @ b[:, n:, None])[..., 0],
+                    np.concatenate([q, qd], axis=-1), (6,))
 
 
 def tool_acceleration(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> NDArray:
@@ -157,9 +194,16 @@ def tool_acceleration(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike)
     The linear part is the acceleration of the tool origin; the angular part the angular
     acceleration of the tool.
     """
-    qd, qdd = joint_array(robot, qd, "qd"), joint_array(robot, qdd, "qdd")
-    J, Jd = jacobian(robot, q), jacobian_dot(robot, q, qd)
-    return (J @ qdd[..., None] + Jd @ qd[..., None])[..., 0]
+    q, qd, qdd = np.broadcast_arrays(joint_array(robot, q), joint_array(robot, qd, "qd"),
+                                     joint_array(robot, qdd, "qdd"))
+    n = robot.n
+
+    def block(b: NDArray) -> NDArray:
+        q, qd, qdd = b[:, :n], b[:, n:2 * n], b[:, 2 * n:]
+        J, Jd = jacobian(robot, q), _jacobian_dot(robot, q, qd)
+        return (J @ qdd[..., None] + Jd @ qd[..., None])[..., 0]
+
+    return streamed(block, np.concatenate([q, qd, qdd], axis=-1), (6,))
 
 
 # --- distance from singularities -------------------------------------------------------------
@@ -191,7 +235,20 @@ def singular_values(robot: Robot, q: ArrayLike, axes: Axes | ArrayLike = "all") 
     -------
     s : ndarray, shape (..., min(rows, n))
     """
-    return np.linalg.svd(jacobian(robot, q)[..., _rows(axes), :], compute_uv=False)
+    rows = _rows(axes)
+    return streamed(lambda b: _singular_values(robot, b, rows), joint_array(robot, q),
+                    (min(int(rows.sum()), robot.n),))
+
+
+def _singular_values(robot: Robot, q: NDArray, rows: NDArray) -> NDArray:
+    return np.linalg.svd(pose_and_jacobian(robot, q)[1][..., rows, :], compute_uv=False)
+
+
+def _measure(robot: Robot, q: ArrayLike, axes, reduce) -> NDArray:
+    """``reduce(singular values)`` (..., ) block by block: only the result is kept whole."""
+    rows = _rows(axes)
+    return streamed(lambda b: reduce(_singular_values(robot, b, rows)), joint_array(robot, q),
+                    ())
 
 
 def manipulability(robot: Robot, q: ArrayLike, axes: Axes | ArrayLike = "all") -> NDArray:
@@ -201,16 +258,18 @@ def manipulability(robot: Robot, q: ArrayLike, axes: Axes | ArrayLike = "all") -
     ``sqrt(det(J^T J))`` otherwise (an arm with fewer than six joints), so it is zero exactly
     at a singularity in both cases.
     """
-    return np.prod(singular_values(robot, q, axes), axis=-1)
+    return _measure(robot, q, axes, lambda s: np.prod(s, axis=-1))
 
 
 def min_singular_value(robot: Robot, q: ArrayLike, axes: Axes | ArrayLike = "all") -> NDArray:
     """Smallest singular value of the chosen Jacobian rows, (...,); zero at a singularity."""
-    return singular_values(robot, q, axes)[..., -1]
+    return _measure(robot, q, axes, lambda s: s[..., -1])
 
 
 def condition_number(robot: Robot, q: ArrayLike, axes: Axes | ArrayLike = "all") -> NDArray:
     """Largest over smallest singular value, (...,); inf at a singularity."""
-    s = singular_values(robot, q, axes)
-    with np.errstate(divide="ignore"):
-        return s[..., 0] / s[..., -1]
+    def ratio(s: NDArray) -> NDArray:
+        with np.errstate(divide="ignore"):
+            return s[..., 0] / s[..., -1]
+
+    return _measure(robot, q, axes, ratio)

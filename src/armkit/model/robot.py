@@ -106,6 +106,22 @@ class Robot:
         """Upper position limits (n,), rad or m."""
         return self.chain.upper
 
+    @property
+    def velocity_limits(self) -> NDArray:
+        """Velocity limits (n,), rad/s or m/s; inf where the robot's file gives none."""
+        return self.chain.velocity_limits
+
+    @property
+    def acceleration_limits(self) -> NDArray:
+        """Acceleration limits (n,), rad/s^2 or m/s^2; inf where the robot's file gives none."""
+        return self.chain.acceleration_limits
+
+    @property
+    def sampling_limits(self) -> tuple[NDArray, NDArray]:
+        """Ranges to draw joint values from, (n,) each: the position limits, and one turn for
+        a revolute joint without them (see `Chain.sampling_limits`)."""
+        return self.chain.sampling_limits
+
     def q_to_si(self, q: ArrayLike) -> NDArray:
         """Joint values (..., n) from file units (deg, mm, ...) to rad and m."""
         q = joint_array(self, q)
@@ -128,20 +144,35 @@ def joint_array(robot: Robot, q: ArrayLike, name: str = "q") -> NDArray:
     Raises
     ------
     InputError
-        ``q: expected last axis 6 (the joints of ur5), found 4``, or a non-finite value.
+        ``q: expected last axis 6 (the joints of ur5), found 4``, a non-finite value, or
+        booleans, complex numbers or text where joint values belong.
     """
-    try:
-        a = np.asarray(q, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected numbers, found {type(q).__name__}") from None
+    if type(q) is np.ndarray and q.dtype == np.float64:
+        a = q
+    else:
+        kind = np.asarray(q).dtype.kind if not isinstance(q, np.ndarray) else q.dtype.kind
+        if kind not in "fiuO":
+            what = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes"}
+            raise InputError(f"{name}: expected real joint values, found "
+                             f"{what.get(kind, f'an array of dtype {np.asarray(q).dtype}')}")
+        try:
+            a = np.asarray(q, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{name}: expected numbers, found {type(q).__name__}") from None
     if a.ndim == 0 or a.shape[-1] != robot.n:
         found = a.shape[-1] if a.ndim else "a scalar"
         raise InputError(f"{name}: expected last axis {robot.n} (the joints of {robot.name}), "
                          f"found {found}")
     a = np.ascontiguousarray(a)
-    # For a few values, a Python check is several times cheaper than two ufunc calls.
-    finite = (all(map(math.isfinite, a.ravel().tolist())) if a.size <= 64
-              else bool(np.isfinite(a).all()))
-    if not finite:
+    if not all_finite(a):
         raise InputError(f"{name}: expected finite joint values, found NaN or inf")
     return a
+
+
+def all_finite(a: NDArray) -> bool:
+    """Whether every value of the float array `a` is finite, in bounded extra memory."""
+    if a.size <= 64:        # a Python check is several times cheaper than two ufunc calls
+        return all(map(math.isfinite, a.ravel().tolist()))
+    flat = a.reshape(-1)
+    step = 1 << 20          # values per block: 1 MB of flags at a time, however large `a` is
+    return all(bool(np.isfinite(flat[i:i + step]).all()) for i in range(0, flat.size, step))

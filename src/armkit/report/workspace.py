@@ -13,7 +13,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from armkit.model.robot import Units
-from armkit.workspace import Workspace
+from armkit.sampled_workspace import Workspace
 
 _POINT = {"s": 0.6, "alpha": 0.35, "linewidths": 0, "color": "tab:blue", "rasterized": True}
 _BASE = {"marker": "+", "color": "tab:red", "s": 60, "linewidths": 1.2, "zorder": 3}

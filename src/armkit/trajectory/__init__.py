@@ -12,20 +12,56 @@
 
 Every builder returns a `Trajectory` (breaks and coefficients, SI); `Trajectory.sample(t)` gives
 `Samples` (q, qd, qdd, qddd), the form the metrics, the tool motion and the figures read.
+
+The names are loaded on first use (PEP 562): building a spline does not import the inverse
+kinematics that `cartesian_line` needs.
 """
 
-from armkit.trajectory.cartesian import CartesianPath, cartesian_line
-from armkit.trajectory.metrics import (Jumps, Stats, compare, knot_jumps, peaks, squared_jerk,
-                                       stats)
-from armkit.trajectory.piecewise import Samples, Trajectory
-from armkit.trajectory.polynomial import cubic, quintic
-from armkit.trajectory.profiles import (Profile, jerk_limited, jerk_limited_profile,
-                                        profile_trajectory, trapezoidal, trapezoidal_profile)
-from armkit.trajectory.retime import retime, waypoint_path
-from armkit.trajectory.spline import PAPER_PATTERNS, patterns, spline
-from armkit.trajectory.tool import ToolMotion, tool_motion
+from __future__ import annotations
 
-__all__ = ["CartesianPath", "cartesian_line", "Trajectory", "Samples", "cubic", "quintic", "trapezoidal", "jerk_limited",
-           "trapezoidal_profile", "jerk_limited_profile", "profile_trajectory", "Profile",
-           "spline", "patterns", "PAPER_PATTERNS", "retime", "waypoint_path", "stats", "compare",
-           "knot_jumps", "squared_jerk", "peaks", "Stats", "Jumps", "tool_motion", "ToolMotion"]
+import importlib
+from typing import TYPE_CHECKING
+
+_HOMES = {
+    **dict.fromkeys(("CartesianPath", "cartesian_line"), "armkit.trajectory.cartesian"),
+    **dict.fromkeys(("Jumps", "Stats", "compare", "knot_jumps", "peaks", "squared_jerk",
+                     "stats"), "armkit.trajectory.metrics"),
+    **dict.fromkeys(("Samples", "Trajectory"), "armkit.trajectory.piecewise"),
+    **dict.fromkeys(("cubic", "quintic"), "armkit.trajectory.polynomial"),
+    **dict.fromkeys(("Profile", "jerk_limited", "jerk_limited_profile", "profile_trajectory",
+                     "trapezoidal", "trapezoidal_profile"), "armkit.trajectory.profiles"),
+    **dict.fromkeys(("retime", "waypoint_path", "RetimeResult"), "armkit.trajectory.retiming"),
+    **dict.fromkeys(("PAPER_PATTERNS", "patterns", "spline"), "armkit.trajectory.splines"),
+    **dict.fromkeys(("ToolMotion", "tool_motion"), "armkit.trajectory.tool"),
+}
+
+if TYPE_CHECKING:
+    from armkit.trajectory.cartesian import CartesianPath, cartesian_line
+    from armkit.trajectory.metrics import (Jumps, Stats, compare, knot_jumps, peaks,
+                                           squared_jerk, stats)
+    from armkit.trajectory.piecewise import Samples, Trajectory
+    from armkit.trajectory.polynomial import cubic, quintic
+    from armkit.trajectory.profiles import (Profile, jerk_limited, jerk_limited_profile,
+                                            profile_trajectory, trapezoidal,
+                                            trapezoidal_profile)
+    from armkit.trajectory.retiming import RetimeResult, retime, waypoint_path
+    from armkit.trajectory.splines import PAPER_PATTERNS, patterns, spline
+    from armkit.trajectory.tool import ToolMotion, tool_motion
+
+
+def __getattr__(name: str):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'armkit.trajectory' has no attribute {name!r}")
+    value = getattr(importlib.import_module(home), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_HOMES))
+
+
+__all__ = list(_HOMES)
+
+

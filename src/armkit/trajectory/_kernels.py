@@ -119,6 +119,8 @@ def _trapezoid_shortest(D, V, A):
 def _trapezoid_within(D, V, A, T):
     """The trapezoid taking exactly T (>= its shortest), keeping A: the cruise velocity is the
     smaller root of v^2 - A T v + A D = 0, written 2 D / (T + sqrt(T^2 - 4 D / A))."""
+    if D <= 0.0:                                # no motion: rest for T (T may be 0)
+        return 0.0, 0.0, T
     v = 2.0 * D / (T + math.sqrt(max(T * T - 4.0 * D / A, 0.0)))
     return 0.0, v / A, max(T - 2.0 * v / A, 0.0)
 

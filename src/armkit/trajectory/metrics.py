@@ -106,7 +106,12 @@ def compare(trajectories: Mapping[str, Trajectory]) -> dict[str, Stats]:
 
     Example
     -------
+    >>> from armkit.trajectory import patterns
+    >>> points = np.deg2rad([[50.4], [43.2], [35], [27]])         # paper 4, joint 2
     >>> table = compare(patterns([0, 2, 4, 5], points))
-    >>> table["4-5-5"].peak_jerk
+    >>> sorted(table)
+    ['3-3-3', '4-5-5', '5-5-5']
+    >>> np.rad2deg(table["3-3-3"].peak_acceleration).round(2)       # deg/s^2
+    array([29.03])
     """
     return {name: stats(tr) for name, tr in trajectories.items()}

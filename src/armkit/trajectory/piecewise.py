@@ -80,7 +80,8 @@ class Trajectory:
         if not (np.isfinite(breaks).all() and np.isfinite(coefficients).all()):
             raise InputError("trajectory: expected finite breaks and coefficients, found NaN or "
                              "inf")
-        if not (np.diff(breaks) > 0).all():
+        resting = breaks.shape[0] == 2 and breaks[0] == breaks[1]      # see `at_rest`
+        if not ((np.diff(breaks) > 0).all() or resting):
             raise InputError("breaks: expected strictly increasing times, found "
                              f"{np.array2string(breaks, threshold=8)}")
         knots = breaks[[0, -1]] if self.knots is None else _frozen(self.knots)
@@ -201,6 +202,13 @@ class Trajectory:
         ndarray, shape (m, S, n)
         """
         return piece_values(self.coefficients, np.asarray(tau, dtype=float), derivative)
+
+
+def at_rest(q: ArrayLike, label: str = "") -> Trajectory:
+    """The motion of zero duration that stays at q (n,): what a point-to-point builder returns
+    for a goal equal to its start. Its breaks are ``[0, 0]``; it samples at t = 0 only."""
+    q = np.asarray(q, dtype=float)
+    return Trajectory([0.0, 0.0], q.reshape(1, 1, -1), label=label)
 
 
 def _derivative_table(c: NDArray, count: int) -> NDArray:

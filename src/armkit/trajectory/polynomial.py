@@ -4,7 +4,7 @@ The quintic between rest states is the inspection-robot paper's law (SPEC.md, R3
 
     q(t) = q0 + (qf - q0) (10 s^3 - 15 s^4 + 6 s^5),   s = t / T.
 
-Both are one-segment cases of `armkit.trajectory.spline`: the cubic meets the end positions and
+Both are one-segment cases of `armkit.spline`: the cubic meets the end positions and
 velocities, the quintic also the end accelerations. All joints share the duration, so they start
 and finish together. Without a duration, the shortest one that keeps every joint within its
 velocity, acceleration and jerk limit is taken, from the laws' peak values
@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.trajectory.piecewise import Trajectory
-from armkit.trajectory.spline import spline
+from armkit.trajectory.piecewise import Trajectory, at_rest
+from armkit.trajectory.splines import spline
 
 # Peak |velocity|, |acceleration|, |jerk| per unit distance at T = 1, rest to rest.
 PEAKS = {"cubic": (1.5, 6.0, 12.0), "quintic": (1.875, 10.0 / np.sqrt(3.0), 60.0)}
@@ -85,7 +85,8 @@ def quintic(q0: ArrayLike, qf: ArrayLike, duration: float | None = None, *,
     Example
     -------
     >>> tr = quintic(np.zeros(6), np.deg2rad([30, -45, 60, 0, 90, 0]), 10.0)
-    >>> tr.evaluate(5.0)                       # halfway: half of each move
+    >>> np.rad2deg(tr.evaluate(5.0))           # halfway: half of each move
+    array([ 15. , -22.5,  30. ,   0. ,  45. ,   0. ])
     """
     return _one_piece("quintic", q0, qf, duration, (vmax, amax, jmax),
                       {"start_velocity": start_velocity, "end_velocity": end_velocity,
@@ -98,6 +99,10 @@ def _one_piece(law: str, q0: ArrayLike, qf: ArrayLike, duration: float | None, l
     """The one-segment spline of degree 3 or 5 from q0 to qf with the given end conditions."""
     q0, qf = _ends(q0, qf)
     moving = any(np.any(v) for v in ends.values() if v is not None)
+    if duration is None and not moving and np.array_equal(q0, qf):
+        for name, value in zip(("vmax", "amax", "jmax"), lims):
+            limits(name, value, q0.shape[0])        # still checked
+        return at_rest(q0, law)                     # no motion: nothing to time
     T = _duration(law, q0, qf, duration, lims, moving)
     tr = spline([0.0, T], [q0, qf], 3 if law == "cubic" else 5, **ends)
     return Trajectory(tr.breaks, tr.coefficients, label=law)

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.trajectory import _kernels
-from armkit.trajectory.piecewise import Trajectory, merge
+from armkit.trajectory.piecewise import Trajectory, at_rest, merge
 
 Sync = Literal["time", "phase"]
 
@@ -112,6 +112,7 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
 
     Example
     -------
+    >>> goals = np.random.default_rng(0).uniform(-1.0, 1.0, (1000, 6))
     >>> p = jerk_limited_profile(np.zeros((1000, 6)), goals, 1.0, 2.0, 10.0)
     >>> p.duration.shape
     (1000,)
@@ -129,7 +130,7 @@ def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, 
     q0, qf : array_like, shape (n,)
         Start and goal (rad or m per joint).
     vmax, amax : float or array_like (n,)
-        Positive limits (rad/s, rad/s^2; m/s, m/s^2), e.g. ``robot.chain.velocity_limits``.
+        Positive limits (rad/s, rad/s^2; m/s, m/s^2), e.g. ``robot.velocity_limits``.
     sync : {"time", "phase"}
         See the module notes.
 
@@ -174,8 +175,8 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     if profile.duration.ndim != 0:
         raise InputError(f"profile: expected one problem (leading shape ()), found "
                          f"{profile.duration.shape}")
-    if not profile.duration > 0:
-        raise InputError("qf: expected a goal away from q0, found the same joint values")
+    if not profile.duration > 0:                    # the goal is the start
+        return at_rest(profile.q0, label)
     n, P, order = profile.q0.shape[0], profile.values.shape[-1], profile.order
     dt = np.diff(profile.times, axis=-1)
     factorials = np.cumprod(np.r_[1.0, np.arange(1, order + 1)])[:, None]

@@ -31,6 +31,7 @@ states use `armkit.trajectory.jerk_limited`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from math import comb
 
 import numpy as np
@@ -40,9 +41,46 @@ from armkit.errors import InputError
 from armkit.trajectory import _kernels
 from armkit.trajectory.piecewise import Trajectory, peak, shift
 from armkit.trajectory.polynomial import limits
-from armkit.trajectory.spline import spline
+from armkit.trajectory.splines import spline
 
 CHECKS_PER_INTERVAL = 8
+
+
+@dataclass(frozen=True, eq=False)
+class RetimeResult:
+    """What `retime` found: the timed motion, or why the path cannot be followed.
+
+    Attributes
+    ----------
+    success : bool
+        True when the whole path is followed within the limits.
+    trajectory : Trajectory or None
+        The path in time from t = 0, label ``"retimed"`` (its ``knots`` are the times the
+        path's knots are passed); None on failure.
+    reason : str
+        ``"ok"``; ``"exceeds the limits"`` (no speed along the path keeps the joint
+        accelerations within their limits there, as at a sharp corner followed at speed);
+        or ``"stops inside the path"`` (the only motion within the limits comes to rest
+        at two neighbouring grid points: a corner).
+    stop : float
+        Path parameter s where it failed (the path's own time, or joint-space distance for
+        waypoints); NaN on success.
+    duration : float
+        Of the trajectory (s); NaN on failure.
+    """
+
+    success: bool
+    trajectory: Trajectory | None
+    reason: str
+    stop: float
+
+    @property
+    def duration(self) -> float:
+        return self.trajectory.duration if self.trajectory is not None else float("nan")
+
+
+def _failed(reason: str, stop: float) -> RetimeResult:
+    return RetimeResult(False, None, reason, float(stop))
 
 
 def waypoint_path(points: ArrayLike) -> Trajectory:
@@ -74,7 +112,7 @@ def waypoint_path(points: ArrayLike) -> Trajectory:
 
 
 def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
-           grid: int = 1000) -> Trajectory:
+           grid: int = 1000) -> RetimeResult:
     """The time-optimal motion along a path, from rest to rest, within joint limits.
 
     Parameters
@@ -91,20 +129,24 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
 
     Returns
     -------
-    Trajectory
-        The same path in time, from t = 0, label ``"retimed"``; ``knots`` are the times the
-        path's knots (waypoints) are passed.
+    RetimeResult
+        ``success``, the timed ``trajectory`` (the same path from t = 0, label
+        ``"retimed"``), and on failure the ``reason`` and where on the path (``stop``): a
+        path the limits cannot follow is a result, not an exception.
 
     Raises
     ------
     InputError
-        For bad limits or grid, or a path that cannot be followed within the limits (a sharp
-        corner).
+        For bad limits, grid or waypoints.
 
     Example
     -------
+    >>> import armkit
     >>> r = armkit.robot("inspection_6dof")
-    >>> tr = retime(waypoints, r.chain.velocity_limits, r.chain.acceleration_limits)
+    >>> waypoints = np.deg2rad([[0, 0, 0, 0, 0, 0], [30, -20, 40, 0, 10, 0], [60, 0, 0, 0, 0, 0]])
+    >>> timed = retime(waypoints, r.velocity_limits, r.acceleration_limits)
+    >>> timed.success, timed.reason, round(timed.duration, 2)
+    (True, 'ok', 1.89)
     """
     if not isinstance(path, Trajectory):
         path = waypoint_path(path)
@@ -142,18 +184,17 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
     x = np.empty(s.shape[0])
     stuck = _kernels.topp(dq, ddq, xv, A, ds, end_top, bool(still[0]), x)
     if stuck >= 0:
-        raise InputError(f"path: cannot be followed within the limits near s = {s[stuck]:.6g}")
+        return _failed("exceeds the limits", s[stuck])
     sd = np.sqrt(np.maximum(x, 0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
         dt = 2 * ds / (sd[:-1] + sd[1:])
     if not np.isfinite(dt).all():
-        raise InputError("path: the motion stops inside the path (ds/dt = 0 at two neighbouring "
-                         "grid points); check the path for a corner")
+        return _failed("stops inside the path", s[np.flatnonzero(~np.isfinite(dt))[0]])
     u = (x[1:] - x[:-1]) / (2 * ds)
     t = np.r_[0.0, np.cumsum(dt)]
     tr = Trajectory(t, _compose(path, s, sd[:-1], u), knots=np.interp(path.knots, s, t),
                     label="retimed")
-    return tr.scaled(_overshoot(tr, V, A))
+    return RetimeResult(True, tr.scaled(_overshoot(tr, V, A)), "ok", float("nan"))
 
 
 def _grid(path: Trajectory, count: int) -> NDArray:
