@@ -226,7 +226,7 @@ def test_refused_and_absent_connections(inspection_map):
 def test_wrong_device_id_is_an_exception_response(inspection_map, sim):
     from dataclasses import replace
     other = replace(inspection_map, device_id=9)
-    with pytest.raises(DriveError, match=r"waypoint 0: Modbus exception 4"):
+    with pytest.raises(DriveError, match=r"waypoint 0: Modbus exception 11 \(gateway no response\)"):
         send_waypoints(other, waypoints(other, 2), port=sim.port, timeout=TIMEOUT)
 
 
