@@ -47,6 +47,10 @@ DataType = Literal["int16", "uint16", "int32", "float32"]
 Order = Literal["big", "little"]
 Address = Annotated[int, Field(ge=0, le=65535, strict=True)]
 Word = Annotated[int, Field(ge=1, le=65535, strict=True)]
+# Bounds that no real register map comes near (123 joints of 8 fields fill about 1,000 values).
+MAX_FILE_BYTES = 1_000_000
+MAX_NODES = 10_000
+MAX_DEPTH = 8
 
 
 # --- the file ----------------------------------------------------------------------------------
@@ -109,7 +113,19 @@ def load_register_map(path: str | Path, robot: str | Path | Robot | None = None)
         For every mistake: ``map.yaml: joints[2].target: expected a register of its own,
         found 4..5, which joints[1].target also uses (3..4)``.
     """
-    return parse_register_map(read_yaml(path), str(path), robot)
+    try:
+        size = Path(path).stat().st_size
+    except (OSError, ValueError):
+        size = 0                               # read_yaml names the reason
+    if size > MAX_FILE_BYTES:
+        raise ModelFileError(str(path), "", f"a register map of at most {MAX_FILE_BYTES} bytes",
+                             f"{size} bytes")
+    try:
+        document = read_yaml(path)
+    except RecursionError:                     # the YAML parser recurses once per level
+        raise ModelFileError(str(path), "", f"fields nested at most {MAX_DEPTH} deep",
+                             "deeper nesting") from None
+    return parse_register_map(document, str(path), robot)
 
 
 def parse_register_map(document: Any, path: str = "<register map>",
@@ -123,6 +139,7 @@ def parse_register_map(document: Any, path: str = "<register map>",
     if not isinstance(document, dict):
         raise ModelFileError(path, "", "a mapping of fields (robot, joints, command, status)",
                              type(document).__name__)
+    _check_size(document, path)
     try:
         spec = RegisterMapFile.model_validate(document)
     except ValidationError as err:
@@ -136,6 +153,29 @@ def parse_register_map(document: Any, path: str = "<register map>",
                        status.accepted, status.state, status.fault, status.fault_bit,
                        spec.readback, path, command.lock, command.reset, refusal.response,
                        refusal.fault_code)
+
+
+def _check_size(document: Any, path: str) -> None:
+    """Refuse a document too large or too deeply nested for a register map before anything
+    looks at it: YAML aliases can make a few hundred bytes into a tree of billions of nodes
+    (shared, so cheap to build, but not to validate or print)."""
+    budget = MAX_NODES
+    stack = [(document, 0, "")]
+    while stack:
+        node, depth, where = stack.pop()
+        budget -= 1
+        if budget < 0:
+            raise ModelFileError(path, where or "top level", f"a register map of at most "
+                                 f"{MAX_NODES} values (YAML aliases count each time used)",
+                                 "more")
+        if depth > MAX_DEPTH:
+            raise ModelFileError(path, where, f"fields nested at most {MAX_DEPTH} deep",
+                                 "deeper nesting")
+        if isinstance(node, dict):
+            stack.extend((v, depth + 1, f"{where}.{str(k)[:40]}" if where else str(k)[:40])
+                         for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, depth + 1, f"{where}[{i}]") for i, v in enumerate(node))
 
 
 def _robot(spec: RegisterMapFile, path: str, given) -> Robot:
