@@ -573,7 +573,7 @@ class DriveClient:
         elif targets_held and held_index == accepted:
             taken = True                   # this waypoint's targets, under another index
         else:
-            taken = False if exclusive else None
+            taken = None                   # an index neither this client's nor the previous
 
         def failed(cause: str) -> tuple[str, _Failed]:
             return "failed", _Failed(cause, taken is None, taken=bool(taken))
@@ -599,10 +599,13 @@ class DriveClient:
         if taken:
             return failed(f"the drive took this waypoint's targets under waypoint index "
                           f"{accepted}, not {index}: the index was changed on the way")
-        mover = ("the index was changed on the way" if exclusive else
-                 "another client is writing to the drive")
+        if exclusive:
+            return failed(f"the drive's waypoint index reads {accepted}, neither {index} nor "
+                          f"{previous}, while this client holds its lock: the index was "
+                          f"changed on the way")
         return failed(f"the drive's waypoint index moved to {accepted} without this client "
-                      f"(it wrote {index} after {previous}): {mover}")
+                      f"(it wrote {index} after {previous}): another client is writing to "
+                      f"the drive")
 
     @staticmethod
     def _fault_text(status: DriveStatus) -> str:
