@@ -29,6 +29,36 @@ def float32_map():
     return parse_register_map(doc, "float32 map")
 
 
+def locked_map(**out_of_limits):
+    """The inspection map with a lock register (29) and a fault reset (30); `out_of_limits`
+    as the file's section of that name."""
+    doc = yaml.safe_load(INSPECTION.read_text())
+    doc["command"].update(lock=29, reset=30)
+    if out_of_limits:
+        doc["out_of_limits"] = out_of_limits
+    return parse_register_map(doc, "locked map")
+
+
+def drive_took(sim: SimDrive, register_map, q) -> int | None:
+    """The last waypoint of `q` (N, n) whose targets the drive took, from the drive's own
+    record (its index register aside); None if it took none of them."""
+    m = register_map
+    keep = [i for i in range(m.block_count) if m.waypoint - m.block_start != i]
+    sent = m.encode(q)[:, keep]
+    taken = {tuple(np.array(block)[keep]) for block in list(sim.taken)}
+    found = [k for k in range(len(q)) if tuple(sent[k]) in taken]
+    return max(found) if found else None
+
+
+def assert_report_true(err, took: int | None) -> None:
+    """A DriveError tells the truth: its last accepted waypoint is the last the drive took,
+    or, when it says the failed waypoint's outcome is unknown, that one may be taken too."""
+    if err.outcome_unknown:
+        assert took in (err.last_accepted, err.waypoint), (str(err), took)
+    else:
+        assert took == err.last_accepted, (str(err), took)
+
+
 MAPS = {"int32": lambda: load_register_map(INSPECTION), "float32": float32_map,
         "water_supply": lambda: load_register_map(WATER)}
 

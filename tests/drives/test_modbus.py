@@ -12,7 +12,9 @@ import pytest
 
 from armkit.drives import DriveClient, SimDrive, check_waypoints, send_waypoints
 from armkit.errors import DriveError, InputError
-from tests.drives.conftest import TIMEOUT, waypoints
+from armkit.drives import load_register_map
+from tests.drives.conftest import (INSPECTION, TIMEOUT, assert_report_true, drive_took,
+                                   locked_map, waypoints)
 
 
 def assert_whole_waypoints(sim: SimDrive, register_map, blocks, flipped: bool = False) -> None:
@@ -108,44 +110,53 @@ def test_velocity_violation_with_times(inspection_map, sim):
     assert list(sim.requests) == []
 
 
-# (fault, injected at waypoint write, keywords, cause, last accepted, outcome unknown)
+# (fault, injected at waypoint write 3, keywords, cause, last accepted, outcome unknown without
+# and with the drive's lock)
 FAULTS = [
-    ("exception", {"code": 4}, "Modbus exception 4 (device failure)", 2, False),
-    ("exception", {"code": 6}, "Modbus exception 6 (device busy)", 2, False),
-    ("fault", {}, "drive fault (state 0x8001, fault code 0x2310)", 2, False),
+    ("exception", {"code": 4}, "Modbus exception 4 (device failure)", 2, False, False),
+    ("exception", {"code": 6}, "Modbus exception 6 (device busy)", 2, False, False),
+    ("fault", {}, "drive fault (state 0x8001, fault code 0x2310)", 2, False, False),
     ("ignore", {}, "not acknowledged within 0.2 s: the drive's waypoint index stayed at 3", 2,
-     True),
-    # The drive took the corrupt write (its index advanced): waypoint 3 was accepted, wrong.
-    ("corrupt", {}, "read-back mismatch at register 0 (joint q1)", 3, False),
-    ("drop", {}, "connection lost", 2, True),
-    ("drop", {"apply": True}, "connection lost", 2, True),
-    ("silence", {}, f"no response within {TIMEOUT:g} s x 1 attempt", 2, True),
+     True, True),
+    # The drive took a corrupt block under waypoint 3's index: not waypoint 3. Without the lock
+    # another client could have written after it, so whether 3 was taken is unknown.
+    ("corrupt", {}, "read-back mismatch at register 0 (joint q1)", 2, True, False),
+    ("drop", {}, "connection lost", 2, True, True),
+    ("drop", {"apply": True}, "connection lost", 2, True, True),
+    ("silence", {}, f"no response within {TIMEOUT:g} s x 1 attempt", 2, True, True),
 ]
 
 
-@pytest.mark.parametrize("kind, keywords, cause, last, unknown", FAULTS)
-def test_each_fault_reports_the_last_accepted_waypoint(inspection_map, kind, keywords, cause,
-                                                       last, unknown):
-    q = waypoints(inspection_map, 10)
-    blocks = inspection_map.encode(q)
-    with SimDrive(inspection_map) as sim:
+@pytest.mark.parametrize("locked", [False, True], ids=["plain", "locked"])
+@pytest.mark.parametrize("kind, keywords, cause, last, unknown, unknown_locked", FAULTS)
+def test_each_fault_reports_the_last_accepted_waypoint(kind, keywords, cause, last, unknown,
+                                                       unknown_locked, locked):
+    register_map = locked_map() if locked else load_register_map(INSPECTION)
+    q = waypoints(register_map, 10)
+    blocks = register_map.encode(q)
+    with SimDrive(register_map) as sim:
         sim.inject(kind, at=3, **keywords)
         with pytest.raises(DriveError) as err:
-            send_waypoints(inspection_map, q, port=sim.port, timeout=TIMEOUT, ack_timeout=0.2)
+            send_waypoints(register_map, q, port=sim.port, timeout=TIMEOUT, ack_timeout=0.2)
         sim.clear()
-        assert_whole_waypoints(sim, inspection_map, blocks[:4], flipped=kind == "corrupt")
+        assert_whole_waypoints(sim, register_map, blocks[:4], flipped=kind == "corrupt")
         taken = [block[:-1] for block in sim.taken]       # the index register aside
+        took = drive_took(sim, register_map, q)
     e = err.value
-    assert (e.waypoint, e.last_accepted, e.outcome_unknown) == (3, last, unknown)
+    expected_unknown = unknown_locked if locked else unknown
+    assert (e.waypoint, e.last_accepted, e.outcome_unknown) == (3, last, expected_unknown)
     assert e.cause.startswith(cause), e.cause
+    assert_report_true(e, took)
     if kind == "corrupt":
-        assert e.cause.endswith("(and the drive took the waypoint with it)")
+        assert e.cause.endswith("under this waypoint's index 4" + (
+            "" if locked else "; another client may have written after it")), e.cause
     assert f"(last accepted waypoint: {last}" in str(e)
     # The drive took waypoints 0..2 whole; after a drop it may also have taken 3, which the
     # client cannot know (outcome unknown); a corrupt write is taken with its wrong register.
     took_fourth = kind == "corrupt" or keywords.get("apply", False)
     assert len(taken) == 3 + took_fourth
     assert taken[:3] == blocks[:3, :-1].tolist()
+    assert took == (3 if keywords.get("apply") else 2)
 
 
 def test_single_writes_count_from_the_connection(inspection_map):
@@ -226,7 +237,7 @@ def test_refused_and_absent_connections(inspection_map):
 def test_wrong_device_id_is_an_exception_response(inspection_map, sim):
     from dataclasses import replace
     other = replace(inspection_map, device_id=9)
-    with pytest.raises(DriveError, match=r"waypoint 0: Modbus exception 4"):
+    with pytest.raises(DriveError, match=r"waypoint 0: Modbus exception 11 \(gateway no response\)"):
         send_waypoints(other, waypoints(other, 2), port=sim.port, timeout=TIMEOUT)
 
 

@@ -7,11 +7,31 @@ A sequence goes out as follows:
    limits, and encoded; a violation raises `InputError` before a connection is opened.
 2. Connect (time-out `timeout`), read the status registers: a drive in fault takes nothing.
    The enable register, if the map has one, is set to 1.
+   With a lock register in the map, the client first takes the drive's lock (its owner token,
+   1..65535): while it holds it the drive refuses every other client's writes.
 3. Per waypoint: one FC16 write of the whole block (every target and the waypoint index), then
    acknowledgement: the status read shows the drive's waypoint index at this waypoint's and no
    fault bit, and (``readback``) the block reads back register for register as written.
 4. The first failure ends the sequence with a `DriveError`: which waypoint, why, the last
    waypoint the drive acknowledged, and whether the failed write's outcome is unknown.
+
+What the report says the drive took comes only from what the drive reports, read back: its
+waypoint index and the registers it holds. Anything unexpected is read again, and acted upon
+only when two consecutive reads agree (a response corrupted on the way is not the drive's
+word). Then:
+
+- index at this waypoint's and the block as written: taken;
+- index still at the previous waypoint's and the block as written: not yet taken (polled until
+  ``ack_timeout``, then the outcome is unknown);
+- the block not as written (a read-back mismatch): a failure of this waypoint, never a
+  qualified success;
+- the index elsewhere: another client is writing to the drive (or the index was changed on the
+  way; when the drive holds this waypoint's targets under that index, it took them);
+- the lock, if the map has one, not holding this client's token: another client has the drive.
+
+Without the lock another client may write between this client's write and its read, so an
+unexpected read leaves the failed waypoint's outcome unknown; with the lock held the drive's
+report is definitive.
 
 The waypoint index is a counter that continues from the drive's own (1..65535, wrapping), so a
 stale index left from an earlier sequence never passes for an acknowledgement.
@@ -25,6 +45,7 @@ report says so, and the client never reconnects on its own in the middle of a se
 
 from __future__ import annotations
 
+import secrets
 import socket
 import time
 from dataclasses import dataclass
@@ -41,6 +62,9 @@ from armkit.model import joint_array
 
 # How often the acknowledgement read is repeated while a drive has not yet taken a waypoint.
 ACK_POLL = 0.001   # s
+# Consecutive reads that must agree before the client acts on an unexpected acknowledgement.
+CONFIRM_READS = 2
+DEVICE_BUSY = 6    # the exception a drive answers to a write while another client holds its lock
 
 
 def port_number(port: int) -> int:
@@ -94,6 +118,8 @@ class DriveStatus:
         The drive's index of the last waypoint it took, if any.
     faulted : bool
         The state's fault bit is set, or the fault code is non-zero.
+    lock : int or None
+        The lock register (the owner's token, 0 when free), if the map has one.
     """
 
     q: NDArray
@@ -101,6 +127,7 @@ class DriveStatus:
     fault_code: int | None
     accepted: int | None
     faulted: bool
+    lock: int | None = None
 
 
 def check_waypoints(register_map: RegisterMap, q: ArrayLike,
@@ -166,11 +193,12 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
 
 
 class _Failed(Exception):
-    """A step failed: why, whether the waypoint's outcome is unknown, whether it was taken."""
+    """A step failed: why, whether the waypoint's outcome is unknown, whether it was taken,
+    and the Modbus exception code of an exception response (0 for none)."""
 
-    def __init__(self, cause: str, unknown: bool, taken: bool = False):
+    def __init__(self, cause: str, unknown: bool, taken: bool = False, code: int = 0):
         super().__init__(cause)
-        self.cause, self.unknown, self.taken = cause, unknown, taken
+        self.cause, self.unknown, self.taken, self.code = cause, unknown, taken, code
 
 
 class _TcpClient(ModbusTcpClient):
@@ -242,6 +270,8 @@ class DriveClient:
         self.timeout, self.retries, self.ack_timeout = timeout, int(retries), ack_timeout
         self._client = _TcpClient(host, port=self.port, timeout=timeout, retries=self.retries)
         self._index: int | None = None     # the drive's waypoint index last written or read
+        self._token: int | None = None     # this client's owner token, with a lock register
+        self._locked = False               # whether this connection took the drive's lock
         self._unread = np.full(register_map.n, np.nan)      # positions not read
         self._unread.setflags(write=False)
 
@@ -267,8 +297,20 @@ class DriveClient:
         return self
 
     def close(self) -> None:
+        """Free the drive's lock (if this client took it and the connection is sound), then
+        close the connection."""
+        if self._locked and self._client.socket is not None:
+            try:
+                self._request("write_register", self.map.lock, 0)
+            except _Failed:
+                pass                        # the drive frees it when the connection ends
+        self._abandon()
+
+    def _abandon(self) -> None:
+        """Close the connection without a further request (after a failure)."""
         self._client.close()
         self._index = None
+        self._locked = False
 
     def __enter__(self) -> DriveClient:
         return self.connect()
@@ -299,7 +341,7 @@ class DriveClient:
             code = getattr(response, "exception_code", 0)
             name = (ExcCodes(code).name.lower().replace("_", " ")
                     if code in set(ExcCodes) else "unknown code")
-            raise _Failed(f"Modbus exception {code} ({name})", False)
+            raise _Failed(f"Modbus exception {code} ({name})", False, code=code)
         return response
 
     def _read(self, reads) -> dict[int, int]:
@@ -320,7 +362,7 @@ class DriveClient:
         DriveError
         """
         m = self.map
-        addresses = {a for a in (m.accepted, m.state, m.fault) if a is not None}
+        addresses = {a for a in (m.accepted, m.state, m.fault, m.lock) if a is not None}
         for joint in m.joints:
             if joint.actual is not None:
                 addresses.update(range(joint.actual, joint.actual + joint.count))
@@ -341,7 +383,8 @@ class DriveClient:
         code = values.get(m.fault) if m.fault is not None else None
         faulted = bool(state is not None and state >> m.fault_bit & 1) or bool(code)
         accepted = values.get(m.accepted) if m.accepted is not None else None
-        return DriveStatus(q, state, code, accepted, faulted)
+        lock = values.get(m.lock) if m.lock is not None else None
+        return DriveStatus(q, state, code, accepted, faulted, lock)
 
     # --- waypoints ---
 
@@ -397,7 +440,8 @@ class DriveClient:
         return self.map.encode_file(self.map.robot.q_from_si(q)).tolist()
 
     def _start(self) -> None:
-        """Before the first waypoint: connected, no fault, the drive's index, enable set."""
+        """Before the first waypoint: connected, the lock taken, no fault, the drive's index,
+        enable set."""
         m = self.map
         if self._client.socket is None:
             try:
@@ -405,8 +449,12 @@ class DriveClient:
             except DriveError as err:
                 raise DriveError(err.cause, None, waypoint=0) from None
         try:
+            if m.lock is not None:
+                self._take_lock()
             values = self._read(m.ack_reads)
             status = self._status(values, self._unread)
+            if m.lock is not None and status.lock != self._token:
+                raise _Failed(self._lock_text(status.lock), False)
             if status.faulted:
                 raise _Failed(f"drive in fault before the first waypoint "
                               f"({self._fault_text(status)})", False)
@@ -415,9 +463,37 @@ class DriveClient:
             if m.enable is not None:
                 self._request("write_register", m.enable, 1)
         except _Failed as failed:
-            self.close()
+            self._abandon()
             raise DriveError(failed.cause, None, waypoint=0,
                              outcome_unknown=False) from None
+
+    def _take_lock(self) -> None:
+        """Write this client's owner token to the lock register."""
+        if self._token is None:
+            self._token = secrets.randbelow(65535) + 1
+        try:
+            self._request("write_register", self.map.lock, self._token)
+        except _Failed as failed:
+            if failed.code != DEVICE_BUSY:
+                raise
+            raise _Failed(f"{failed.cause}: {self._lock_text(self._lock_holder())}",
+                          False) from None
+        self._locked = True
+
+    def _lock_holder(self) -> int | None:
+        """The lock register as the drive reports it; None if it cannot be read."""
+        try:
+            return self._read([(self.map.lock, 1)])[self.map.lock]
+        except _Failed:
+            return None
+
+    def _lock_text(self, held: int | None) -> str:
+        if held is None:
+            return "another client may hold the drive's lock (it could not be read)"
+        if held == 0:
+            return "the drive's lock is free, not held by this client: another client may write"
+        return (f"another client holds the drive's lock (owner token {held:#06x}, this "
+                f"client's {self._token:#06x})")
 
     def _write(self, k: int, block: list[int]) -> int:
         """Write waypoint k whole and wait for its acknowledgement; its index on the drive."""
@@ -429,21 +505,29 @@ class DriveClient:
         try:
             self._request("write_registers", m.block_start, block)
         except _Failed as failed:
-            self.close()
-            raise DriveError(failed.cause, last, waypoint=k,
+            cause = failed.cause
+            if failed.code == DEVICE_BUSY and m.lock is not None:
+                cause = f"{cause}: {self._lock_text(self._lock_holder())}"
+            self._abandon()
+            raise DriveError(cause, last, waypoint=k,
                              outcome_unknown=failed.unknown) from None
         try:
             self._acknowledge(index, block)
         except _Failed as failed:
-            self.close()
+            self._abandon()
             raise DriveError(failed.cause, k if failed.taken else last,
                              waypoint=k, outcome_unknown=failed.unknown) from None
         self._index = index
         return index
 
     def _acknowledge(self, index: int, block: list[int]) -> None:
+        """Read until the drive reports waypoint `index` taken as written; else _Failed.
+
+        An unexpected report is acted upon only when CONFIRM_READS consecutive reads agree.
+        """
         m = self.map
         deadline = time.monotonic() + self.ack_timeout
+        seen, agreeing = None, 0
         while True:
             try:
                 values = self._read(m.ack_reads)
@@ -451,31 +535,82 @@ class DriveClient:
                 # The write was answered, so the drive holds the registers; whether it took
                 # the waypoint was not seen.
                 raise _Failed(f"acknowledgement read failed: {failed.cause}", True) from None
-            status = self._status(values, self._unread)
-            taken = m.accepted is None or status.accepted == index
-            if status.faulted:
-                raise _Failed(f"drive fault ({self._fault_text(status)})", False,
-                              taken=taken and m.accepted is not None)
-            if m.readback:
-                for offset, wrote in enumerate(block):
-                    held = values[m.block_start + offset]
-                    if held != wrote:
-                        address = m.block_start + offset
-                        took = (" (and the drive took the waypoint with it)"
-                                if taken and m.accepted is not None else "")
-                        raise _Failed(f"read-back mismatch at register {address} "
-                                      f"({m.joint_at(address)}): wrote {wrote:#06x}, the "
-                                      f"drive holds {held:#06x}{took}", False,
-                                      taken=taken and m.accepted is not None)
-            if taken:
+            verdict, failure = self._verdict(values, index, block)
+            if verdict == "taken":
                 return
-            if status.accepted != self._index:
-                raise _Failed(f"the drive reports waypoint index {status.accepted}, expected "
-                              f"{index} (or {self._index} before it takes this one)", False)
+            if verdict == "pending":
+                seen, agreeing = None, 0
+                if time.monotonic() > deadline:
+                    raise _Failed(f"not acknowledged within {self.ack_timeout:g} s: the "
+                                  f"drive's waypoint index stayed at {self._index}", True)
+                time.sleep(ACK_POLL)
+                continue
+            report = tuple(sorted(values.items()))
+            seen, agreeing = report, (agreeing + 1 if report == seen else 1)
+            if agreeing >= CONFIRM_READS:
+                raise failure
             if time.monotonic() > deadline:
-                raise _Failed(f"not acknowledged within {self.ack_timeout:g} s: the drive's "
-                              f"waypoint index stayed at {status.accepted}", True)
-            time.sleep(ACK_POLL)
+                raise _Failed(f"the drive's reports disagree from read to read (the last: "
+                              f"{failure.cause})", True)
+
+    def _verdict(self, values: dict[int, int], index: int,
+                 block: list[int]) -> tuple[str, _Failed | None]:
+        """What one acknowledgement read says of the waypoint written with `index`:
+        ("taken", None), ("pending", None) or ("failed", the failure to raise)."""
+        m = self.map
+        status = self._status(values, self._unread)
+        accepted, previous = status.accepted, self._index
+        lock_held = m.lock is None or status.lock == self._token
+        exclusive = m.lock is not None and lock_held    # no other client can have written
+        held = [values[m.block_start + i] for i in range(m.block_count)] if m.readback else None
+        as_written = held is None or held == block
+        if m.waypoint is not None and held is not None:
+            at = m.waypoint - m.block_start
+            targets_held = held[:at] + held[at + 1:] == block[:at] + block[at + 1:]
+            held_index = held[at]
+        else:
+            targets_held, held_index = False, None
+        # Whether the drive took this waypoint: True, False, or None (its reports cannot say).
+        if accepted is None or accepted == index:
+            taken = True if as_written else (False if exclusive else None)
+        elif accepted == previous:
+            taken = False if (as_written or exclusive) else None
+        elif targets_held and held_index == accepted:
+            taken = True                   # this waypoint's targets, under another index
+        else:
+            taken = None                   # an index neither this client's nor the previous
+
+        def failed(cause: str) -> tuple[str, _Failed]:
+            return "failed", _Failed(cause, taken is None, taken=bool(taken))
+
+        if not lock_held:
+            return failed(self._lock_text(status.lock))
+        if status.faulted:
+            return failed(f"drive fault ({self._fault_text(status)})")
+        if as_written and (accepted is None or accepted == index):
+            return "taken", None
+        if as_written and accepted == previous:
+            return "pending", None
+        others = "" if exclusive else "; another client may have written after it"
+        if not as_written and (accepted is None or accepted in (index, previous)):
+            offset = next(i for i, (h, w) in enumerate(zip(held, block)) if h != w)
+            address = m.block_start + offset
+            state = (f"under this waypoint's index {index}" if accepted == index else
+                     "and its index says it has taken nothing since the previous waypoint"
+                     if accepted is not None else "")
+            return failed(f"read-back mismatch at register {address} ({m.joint_at(address)}): "
+                          f"wrote {block[offset]:#06x}, the drive holds {held[offset]:#06x}"
+                          f"{' ' * bool(state)}{state}{others}")
+        if taken:
+            return failed(f"the drive took this waypoint's targets under waypoint index "
+                          f"{accepted}, not {index}: the index was changed on the way")
+        if exclusive:
+            return failed(f"the drive's waypoint index reads {accepted}, neither {index} nor "
+                          f"{previous}, while this client holds its lock: the index was "
+                          f"changed on the way")
+        return failed(f"the drive's waypoint index moved to {accepted} without this client "
+                      f"(it wrote {index} after {previous}): another client is writing to "
+                      f"the drive")
 
     @staticmethod
     def _fault_text(status: DriveStatus) -> str:

@@ -1,9 +1,31 @@
-"""A simulated multi-axis drive: a real Modbus TCP server (pymodbus) holding one register map.
+"""A simulated motor drive: a real Modbus TCP server holding one register map.
 
 Each joint moves toward its target register at the robot's velocity limit, in real time (the
 position is brought up to date whenever a request arrives), and the status registers report
 it. A waypoint write (the whole block in one FC16 request) is taken by copying its index into
 ``status.accepted``. State bits: 0 enabled, 1 moving, and the map's fault bit.
+
+It answers as a Modbus TCP device does (Modbus Application Protocol V1.1b3 and the Messaging
+on TCP/IP Implementation Guide V1.0b):
+
+- functions 3 (read holding registers), 6 (write single register) and 16 (write multiple
+  registers); any other function is answered with exception 1 (illegal function), the function
+  code with its high bit set (``0x81``, ``0xC1`` ...);
+- a quantity outside 1..125 (read) or 1..123 (write), a byte count that disagrees with it, or a
+  request of the wrong length: exception 3 (illegal data value); a register it does not hold,
+  or a write to a register that is not a command (status, actual positions): exception 2;
+- unit ids: its own (the map's ``device_id``), 0 and 255 (the id of a device addressed by its
+  IP address alone); any other, exception 11 (gateway target device failed to respond), as
+  a gateway answers for a unit that is not behind it;
+- several requests in one TCP segment (pipelined) are each answered, in order; a frame with a
+  length field outside 2..254 closes the connection, one with another protocol id is dropped;
+- a waypoint outside the joint limits, or NaN or inf in a float32 target, is refused as the
+  map says (``out_of_limits``): exception 3 and nothing held, or the registers held, nothing
+  taken and a fault with the map's code. The joints never move outside their limits;
+- the lock register, if the map has one, gives one connection exclusive access: writing a
+  non-zero token takes it when free, writing 0 frees it, and so does the owner's disconnect;
+  while it is held, a write from any other connection is answered with exception 6 (server
+  device busy). A non-zero write to the reset register clears a fault.
 
 Faults can be injected for tests; ``at`` counts waypoint writes from 0 since the drive started:
 
@@ -19,7 +41,7 @@ fault       at waypoint write ``at``: hold the registers but do not take the way
 ignore      at waypoint write ``at``: hold the registers but never take the waypoint (its index
             is not acknowledged), with no fault
 corrupt     at waypoint write ``at``: store the first register of the block with its lowest bit
-            flipped (a read-back mismatch)
+            flipped, and take it so (a read-back mismatch)
 ==========  =====================================================================================
 
 >>> from importlib import resources
@@ -33,6 +55,7 @@ corrupt     at waypoint write ``at``: store the first register of the block with
 from __future__ import annotations
 
 import asyncio
+import struct
 import threading
 import time
 from collections import deque
@@ -41,18 +64,20 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from pymodbus.constants import ExcCodes
-from pymodbus.server import ModbusTcpServer
-from pymodbus.simulator import DataType, SimData, SimDevice
 
 from armkit.drives.modbus import port_number
-from armkit.drives.registers import RegisterMap
+from armkit.drives.registers import MAX_READ, MAX_WRITE, RegisterMap
 from armkit.errors import DriveError, InputError
 
 FAULTS = ("refuse", "drop", "silence", "exception", "fault", "ignore", "corrupt")
 ENABLED_BIT, MOVING_BIT = 0, 1
 WRITES = (6, 16)   # function codes that write holding registers: single, multiple
 KEPT_REQUESTS = 100_000
+# Exception codes (Modbus Application Protocol V1.1b3, section 7).
+ILLEGAL_FUNCTION, ILLEGAL_ADDRESS, ILLEGAL_VALUE = 0x01, 0x02, 0x03
+DEVICE_FAILURE, DEVICE_BUSY, GATEWAY_NO_RESPONSE = 0x04, 0x06, 0x0B
+MBAP = struct.Struct(">HHHB")     # transaction id, protocol id, length, unit id
+NO_ANSWER = -1                    # a write the drive does not answer (dropped, silent)
 
 
 @dataclass(frozen=True)
@@ -61,6 +86,36 @@ class _Armed:
     at: int
     code: int
     apply: bool
+
+
+class _Connection(asyncio.Protocol):
+    """One client's TCP connection: splits the byte stream into Modbus TCP frames, in order."""
+
+    def __init__(self, drive: SimDrive):
+        self.drive, self.buffer, self.transport = drive, bytearray(), None
+
+    def connection_made(self, transport) -> None:
+        self.transport = transport
+        self.drive.connections.add(self)
+
+    def data_received(self, data: bytes) -> None:
+        self.buffer += data
+        while len(self.buffer) >= MBAP.size and not self.transport.is_closing():
+            length = int.from_bytes(self.buffer[4:6], "big")
+            if not 2 <= length <= 254:           # no room for a function code, or > 260 bytes
+                self.buffer.clear()
+                self.transport.close()
+                return
+            if len(self.buffer) < 6 + length:
+                return
+            frame = bytes(self.buffer[:6 + length])
+            del self.buffer[:6 + length]
+            reply = self.drive.answer(self, frame)
+            if reply is not None and not self.transport.is_closing():
+                self.transport.write(reply)
+
+    def connection_lost(self, exc) -> None:
+        self.drive.disconnected(self)
 
 
 class SimDrive:
@@ -78,11 +133,13 @@ class SimDrive:
     Attributes
     ----------
     requests : deque of (int, int, int)
-        (function code, address, count) of the last 100,000 requests received, in order.
+        (function code, address, count) of the last 100,000 valid requests received, in order.
     waypoint_writes : int
-        Number of whole-block writes received.
+        Number of whole-block writes received (those refused for another's lock aside).
     taken : deque of list of int
         The blocks of the last 100,000 waypoints the drive took, as written (index included).
+    refused : deque of list of int
+        The blocks of the last 100,000 waypoints refused as outside the limits or not finite.
     """
 
     def __init__(self, register_map: RegisterMap, host: str = "127.0.0.1", port: int = 0):
@@ -90,25 +147,38 @@ class SimDrive:
         m, robot = register_map, register_map.robot
         addresses = [a for j in m.joints for a in (j.target, j.actual) if a is not None]
         addresses += [j.actual + j.count - 1 for j in m.joints if j.actual is not None]
-        addresses += [a for a in (m.waypoint, m.enable, m.accepted, m.state, m.fault)
-                      if a is not None]
+        addresses += [a for a in (m.waypoint, m.enable, m.accepted, m.state, m.fault, m.lock,
+                                  m.reset) if a is not None]
         self._first = min(addresses + [m.block_start])
         self._last = max(addresses + [m.block_start + m.block_count - 1])
+        self._writable = set(range(m.block_start, m.block_start + m.block_count))
+        self._writable |= {a for a in (m.enable, m.lock, m.reset) if a is not None}
+        self._units = {m.device_id, 0, 255}
         self._speed = robot.q_from_si(robot.chain.velocity_limits)       # file units / s
-        home = np.clip(0.0, robot.q_from_si(robot.lower), robot.q_from_si(robot.upper))
+        self._lower, self._upper = robot.q_from_si(robot.lower), robot.q_from_si(robot.upper)
+        # A waypoint within the limits may round past them by up to half a count (integers) or
+        # float32's relative precision: the drive allows that much, and no more.
+        scale = np.array([j.scale for j in m.joints])
+        is_float = np.array([j.type == "float32" for j in m.joints])
+        extent = np.maximum(np.abs(self._lower), np.abs(self._upper))
+        self._slack = np.where(is_float, extent * 2.0 ** -23, 0.5 / scale * (1 + 1e-9))
+        home = np.clip(0.0, self._lower, self._upper)
         self._position = home.astype(float)
         self._target = home.astype(float)
         self.requests: deque[tuple[int, int, int]] = deque(maxlen=KEPT_REQUESTS)
         self.waypoint_writes = 0
         self.taken: deque[list[int]] = deque(maxlen=KEPT_REQUESTS)
+        self.refused: deque[list[int]] = deque(maxlen=KEPT_REQUESTS)
+        self.connections: set[_Connection] = set()
         self._armed: _Armed | None = None
         self._fault_code = 0
         self._silent = self._refusing = False
+        self._owner: _Connection | None = None
         self._registers: list[int] | None = None
         self._moved_at = time.monotonic()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
-        self._server: ModbusTcpServer | None = None
+        self._server: asyncio.base_events.Server | None = None
 
     # --- the registers ---
 
@@ -140,21 +210,105 @@ class SimDrive:
         return self.map.robot.q_to_si(self._target)
 
     @property
+    def position(self) -> NDArray:
+        """Where the joints are, (n,), rad and m, as of the last request."""
+        return self.map.robot.q_to_si(self._position)
+
+    @property
     def writes(self) -> list[tuple[int, int]]:
         """(address, count) of every write request received."""
-        return [(a, n) for fc, a, n in self.requests if fc in WRITES]
+        return [(a, n) for fc, a, n in list(self.requests) if fc in WRITES]
+
+    # --- Modbus TCP ---
+
+    def answer(self, connection: _Connection, frame: bytes) -> bytes | None:
+        """The response to one Modbus TCP frame (MBAP header and PDU), or None for none."""
+        transaction, protocol, _, unit = MBAP.unpack_from(frame)
+        if protocol != 0:                        # not Modbus (implementation guide 3.1.3)
+            return None
+        pdu = frame[MBAP.size:]
+        function = pdu[0]
+
+        def reply(body: bytes) -> bytes:
+            return MBAP.pack(transaction, 0, len(body) + 1, unit) + body
+
+        if unit not in self._units:
+            return reply(bytes([function | 0x80, GATEWAY_NO_RESPONSE]))
+        request = self._parse(function, pdu)
+        if isinstance(request, int):
+            return reply(bytes([function | 0x80, request]))
+        address, count, values = request
+        self.requests.append((function, address, count))
+        regs = self._registers
+        self._advance(regs)
+        if self._silent:
+            return None
+        if values is None:
+            held = regs[self._slice(address, count)]
+            return reply(struct.pack(f">BB{count}H", function, 2 * count, *held))
+        code = self._write(connection, regs, address, values)
+        if code == NO_ANSWER:
+            return None
+        if code:
+            return reply(bytes([function | 0x80, code]))
+        return reply(pdu[:5])           # FC6 echoes address and value; FC16 address and count
+
+    def _parse(self, function: int, pdu: bytes) -> tuple[int, int, list[int] | None] | int:
+        """(address, count, values or None for a read), or the exception code to answer."""
+        if function == 3:
+            if len(pdu) != 5:
+                return ILLEGAL_VALUE
+            address, count = struct.unpack_from(">HH", pdu, 1)
+            if not 1 <= count <= MAX_READ:
+                return ILLEGAL_VALUE
+            if address < self._first or address + count - 1 > self._last:
+                return ILLEGAL_ADDRESS
+            return address, count, None
+        if function == 6:
+            if len(pdu) != 5:
+                return ILLEGAL_VALUE
+            address, value = struct.unpack_from(">HH", pdu, 1)
+            return (address, 1, [value]) if address in self._writable else ILLEGAL_ADDRESS
+        if function == 16:
+            if len(pdu) < 6:
+                return ILLEGAL_VALUE
+            address, count, size = struct.unpack_from(">HHB", pdu, 1)
+            if not 1 <= count <= MAX_WRITE or size != 2 * count or len(pdu) != 6 + size:
+                return ILLEGAL_VALUE
+            if not all(a in self._writable for a in range(address, address + count)):
+                return ILLEGAL_ADDRESS
+            return address, count, list(struct.unpack_from(f">{count}H", pdu, 6))
+        return ILLEGAL_FUNCTION
+
+    def _write(self, connection: _Connection, regs: list[int], address: int,
+               values: list[int]) -> int:
+        """Execute a write: 0, an exception code, or NO_ANSWER."""
+        m = self.map
+        if self._owner is not None and self._owner is not connection:
+            return DEVICE_BUSY                    # another connection holds the lock
+        if (address, len(values)) == (m.block_start, m.block_count):
+            return self._waypoint(regs, values)
+        for a, value in zip(range(address, address + len(values)), values):
+            if a == m.lock:
+                self._owner = connection if value else None
+            elif a == m.reset:
+                if value:
+                    self._fault_code = 0
+                value = 0                          # a trigger: it reads 0
+            regs[a - self._first] = value
+        self._write_state(regs)
+        return 0
 
     # --- behaviour ---
 
     def _advance(self, regs: list[int]) -> None:
         """Bring the joints up to now: each toward its target at its speed limit."""
-        m = self.map
         now = time.monotonic()
         dt, self._moved_at = now - self._moved_at, now
         if self._enabled(regs) and not self._fault_code:
             gap = self._target - self._position
             if gap.any():
-                step = self._speed * dt
+                step = np.where(np.isfinite(self._speed), self._speed * dt, np.inf)
                 self._position = self._position + np.clip(gap, -step, step)
                 self._write_actual(regs)
         self._write_state(regs)
@@ -180,61 +334,63 @@ class SimDrive:
         if m.fault is not None:
             regs[m.fault - self._first] = self._fault_code
 
+    def _outside(self, values: list[int]) -> bool:
+        """Whether a block holds a target outside the joint limits (beyond rounding) or one
+        that is not finite."""
+        q = self.map.decode_file(values)
+        with np.errstate(invalid="ignore"):
+            inside = (q >= self._lower - self._slack) & (q <= self._upper + self._slack)
+        return not inside.all()             # NaN compares False: outside
+
     def _take(self, regs: list[int], values: list[int]) -> None:
         """Take a waypoint block: it becomes the target the joints move to."""
         m = self.map
         self.taken.append(list(values))
-        self._target = m.decode_file(values)
+        self._target = np.clip(m.decode_file(values), self._lower, self._upper)
         if m.waypoint is not None:
             regs[m.accepted - self._first] = values[m.waypoint - m.block_start]
+        self._write_state(regs)
 
-    async def _action(self, function_code: int, start: int, address: int, count: int,
-                      regs: list[int], values: list[int] | None) -> ExcCodes | None:
-        """Called by pymodbus before it answers a request (or applies a write)."""
-        if self._registers is None:             # the start-up read that hands us the list
-            self._registers = regs
-            return None
-        if not (function_code == 6 and values is None):    # FC6 reads back what it wrote
-            self.requests.append((function_code, address, count))
-        self._advance(regs)
-        if self._silent:
-            return await self._hold()
-        if values is None:
-            return None
-        if (address, count) != (self.map.block_start, self.map.block_count):
-            return None
-        return await self._waypoint(regs, values)
-
-    async def _waypoint(self, regs: list[int], values: list[int]) -> ExcCodes | None:
+    def _waypoint(self, regs: list[int], values: list[int]) -> int:
+        m = self.map
         at, self.waypoint_writes = self.waypoint_writes, self.waypoint_writes + 1
         armed = self._armed if self._armed is not None and self._armed.at == at else None
         kind = armed.kind if armed else None
         if kind == "exception":
-            return ExcCodes(armed.code)
-        if kind == "drop":
-            if armed.apply:
-                regs[self._slice(self.map.block_start, self.map.block_count)] = values
-                self._take(regs, values)
-            for connection in list(self._server.active_connections.values()):
-                connection.close()
-            return ExcCodes.DEVICE_FAILURE          # nobody hears it; keeps pymodbus from writing
+            return armed.code
         if kind == "silence":
             self._silent = True
-            return await self._hold()
+            return NO_ANSWER
+        if kind == "corrupt":
+            values = [values[0] ^ 1] + values[1:]
+        outside = self._outside(values)
+        if outside and m.limit_response == "exception":
+            self.refused.append(list(values))
+            return ILLEGAL_VALUE
+        if kind == "drop":
+            if armed.apply and not outside and not self._fault_code:
+                regs[self._slice(m.block_start, m.block_count)] = values
+                self._take(regs, values)
+            for connection in list(self.connections):
+                connection.transport.close()
+            return NO_ANSWER
+        regs[self._slice(m.block_start, m.block_count)] = values   # the registers hold it
         if kind == "fault":
             self._fault_code = armed.code
-            self._write_state(regs)
-            return None
-        if kind == "corrupt":
-            values[0] ^= 1
-        if kind != "ignore" and not self._fault_code:
+        elif outside:
+            self.refused.append(list(values))
+            self._fault_code = m.limit_fault_code
+        elif kind != "ignore" and not self._fault_code:
             self._take(regs, values)
-        return None
+        self._write_state(regs)
+        return 0
 
-    async def _hold(self) -> ExcCodes:
-        """Answer nothing until the fault is cleared or the drive stops."""
-        await self._wake.wait()
-        return ExcCodes.DEVICE_BUSY
+    def disconnected(self, connection: _Connection) -> None:
+        """A connection closed: its lock, if it held it, is free."""
+        self.connections.discard(connection)
+        if self._owner is connection:
+            self._owner = None
+            self._registers[self.map.lock - self._first] = 0
 
     # --- faults ---
 
@@ -245,16 +401,20 @@ class SimDrive:
         Raises
         ------
         InputError
-            An unknown kind, or a negative `at`.
+            An unknown kind, a negative `at`, or a code outside 1..255 (an exception) or
+            1..65535 (a fault).
         """
         if kind not in FAULTS:
             raise InputError(f"fault: expected one of {', '.join(FAULTS)}, found {kind!r}")
         if at < 0:
             raise InputError(f"fault at: expected a waypoint write >= 0, found {at}")
+        largest = 65535 if kind == "fault" else 255
+        if code is not None and not 1 <= code <= largest:
+            raise InputError(f"fault code: expected 1..{largest}, found {code}")
         if kind == "refuse":
             self._call(self._refuse())
             return
-        default = 0x2310 if kind == "fault" else int(ExcCodes.DEVICE_FAILURE)
+        default = 0x2310 if kind == "fault" else DEVICE_FAILURE
         self._armed = _Armed(kind, int(at), default if code is None else int(code), apply)
 
     def clear(self) -> None:
@@ -267,15 +427,18 @@ class SimDrive:
     async def _refuse(self) -> None:
         if not self._refusing:
             self._refusing = True
-            self._server.transport.close()
+            self._server.close()
 
     async def _recover(self) -> None:
-        self._wake.set()
-        self._wake = asyncio.Event()
+        if self._registers is not None:
+            self._write_state(self._registers)
         if self._refusing:
-            self._server.transport = await self._loop.create_server(
-                self._server.handle_new_connection, self.host, self.port, reuse_address=True)
+            self._server = await self._listen()
             self._refusing = False
+
+    async def _listen(self):
+        return await self._loop.create_server(lambda: _Connection(self), self.host, self.port,
+                                              reuse_address=True)
 
     def _call(self, coroutine, timeout: float = 5.0) -> None:
         """Run a coroutine on the drive's event loop from another thread, and wait for it."""
@@ -288,24 +451,22 @@ class SimDrive:
 
     async def _serve(self, ready: Callable[[], None]) -> None:
         self._loop = asyncio.get_running_loop()
-        self._wake, self._stopping = asyncio.Event(), asyncio.Event()
-        block = SimData(address=self._first, values=self._initial_registers(),
-                        datatype=DataType.REGISTERS)
-        device = SimDevice(id=self.map.device_id, simdata=[block], action=self._action)
-        self._server = ModbusTcpServer(device, address=(self.host, self.port))
+        self._stopping = asyncio.Event()
+        self._registers = self._initial_registers()
         try:
-            await self._server.serve_forever(background=True)
-        except RuntimeError:
+            self._server = await self._listen()
+        except OSError as err:
             raise DriveError(f"simulated drive: cannot listen on {self.host}:{self.port} "
-                             f"(in use, or not an address of this machine)") from None
-        self.port = self._server.transport.sockets[0].getsockname()[1]
-        await self._server.async_getValues(self.map.device_id, 3, self._first, 1)
+                             f"({err.strerror or err})") from None
+        self.port = self._server.sockets[0].getsockname()[1]
         ready()
         try:
             await self._stopping.wait()
         finally:
-            self._wake.set()
-            await self._server.shutdown()
+            self._server.close()
+            for connection in list(self.connections):
+                connection.transport.abort()
+            await asyncio.sleep(0)                # let the connections see their end
 
     def start(self, timeout: float = 5.0) -> SimDrive:
         """Serve on a background thread; returns once it listens.
