@@ -63,11 +63,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from armkit.drives.modbus import port_number
 from armkit.drives.registers import MAX_READ, MAX_WRITE, RegisterMap
 from armkit.errors import DriveError, InputError
+from armkit.model.robot import joint_array
 
 FAULTS = ("refuse", "drop", "silence", "exception", "fault", "ignore", "corrupt")
 ENABLED_BIT, MOVING_BIT = 0, 1
@@ -129,6 +130,8 @@ class SimDrive:
         Address to listen on; loopback by default.
     port : int
         0 picks a free port; `port` holds the real one once started.
+    position : array_like (n,), optional
+        Where the joints start (rad, m); zero, or the nearest limit, by default.
 
     Attributes
     ----------
@@ -142,7 +145,8 @@ class SimDrive:
         The blocks of the last 100,000 waypoints refused as outside the limits or not finite.
     """
 
-    def __init__(self, register_map: RegisterMap, host: str = "127.0.0.1", port: int = 0):
+    def __init__(self, register_map: RegisterMap, host: str = "127.0.0.1", port: int = 0, *,
+                 position: ArrayLike | None = None):
         self.map, self.host, self.port = register_map, host, port_number(port)
         m, robot = register_map, register_map.robot
         addresses = [a for j in m.joints for a in (j.target, j.actual) if a is not None]
@@ -162,7 +166,8 @@ class SimDrive:
         is_float = np.array([j.type == "float32" for j in m.joints])
         extent = np.maximum(np.abs(self._lower), np.abs(self._upper))
         self._slack = np.where(is_float, extent * 2.0 ** -23, 0.5 / scale * (1 + 1e-9))
-        home = np.clip(0.0, self._lower, self._upper)
+        home = np.clip(0.0 if position is None else robot.q_from_si(
+            joint_array(robot, position, "position")), self._lower, self._upper)
         self._position = home.astype(float)
         self._target = home.astype(float)
         self.requests: deque[tuple[int, int, int]] = deque(maxlen=KEPT_REQUESTS)

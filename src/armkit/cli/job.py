@@ -1,0 +1,112 @@
+"""`armkit run TASK.yaml`, `armkit demo` and `armkit view ROBOT [Q...]`: the end-to-end job, its
+built-in task, and the 3-D view of any robot."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from armkit.cli.app import EXIT_FAILED, NUMBERS, JsonFlag, app, output_folder, print_json, stdout
+
+STEP_NAMES = {"target": "target to the base frame", "drive": "the arm's joints from the drive",
+              "ik": "inverse kinematics", "plan": "collision-free path",
+              "trajectory": "smooth motion within the limits", "send": "waypoints to the drive",
+              "arrival": "the drive's arrival", "check": "final position"}
+
+OutOption = Annotated[Path | None, typer.Option(
+    "--out", help="Folder for the report (default: the task's `report`, else ./armkit-report).")]
+
+
+def _job(task, out: Path, as_json: bool) -> None:
+    """Run a task with a progress display (or quietly with --json), write its report, print
+    where it is; exit 1 if the job stopped short."""
+    from armkit.report.job import summary, write_report
+    from armkit.task import run_task
+
+    out = output_folder(out)
+    started = time.perf_counter()
+    if as_json:
+        result = run_task(task)
+    else:
+        stdout.rule(f"armkit run: {task.name} ({task.robot.name}, {task.robot.n} joints)")
+        with stdout.status("starting") as status:
+            def on_step(step: str, detail: str) -> None:
+                if detail:
+                    stdout.print(f"  [green]done[/green] {STEP_NAMES[step]}: {detail}")
+                else:
+                    status.update(f"{STEP_NAMES[step]} ...")
+            result = run_task(task, on_step)
+    write_report(result, out)
+    if as_json:
+        print_json({**summary(result), "report": str(out / "report.html")})
+    else:
+        u = task.units
+        if result.success:
+            stdout.print(f"[bold green]done[/bold green] in {time.perf_counter() - started:.1f} "
+                         f"s: the tool is {u.length_from_si(result.position_error):.4f} "
+                         f"{u.length} from the target (the drive's resolution allows "
+                         f"{u.length_from_si(result.resolution):.4f} {u.length})")
+        else:
+            stdout.print(f"[bold red]stopped[/bold red] at {STEP_NAMES.get(result.stopped_at, result.stopped_at)}: "
+                         f"{result.reason}", markup=True)
+        stdout.print(f"report: {out / 'report.html'}")
+    if not result.success:
+        raise typer.Exit(EXIT_FAILED)
+
+
+@app.command()
+def run(task: Annotated[Path, typer.Argument(help="Task file (YAML).")],
+        out: OutOption = None, as_json: JsonFlag = False) -> None:
+    """Run the end-to-end job of a task file: target, IK, path, motion, drive, report."""
+    from armkit.io.tasks import load_task
+
+    job = load_task(task)
+    _job(job, out or job.report or Path("armkit-report"), as_json)
+
+
+@app.command()
+def demo(out: Annotated[Path, typer.Option("--out", help="Folder for the report.")] = Path(
+             "armkit-demo"), as_json: JsonFlag = False) -> None:
+    """Run the built-in water-supply task (paper 1) against the simulated drive."""
+    from armkit.task import demo_task
+
+    _job(demo_task(), out, as_json)
+
+
+@app.command(context_settings=NUMBERS)
+def view(robot: Annotated[str, typer.Argument(help="Built-in name or robot file.")],
+         q: Annotated[list[str] | None, typer.Argument(
+             help="Joint values in the file's units (default: zero, or the nearest limit).")]
+         = None,
+         out: Annotated[Path, typer.Option("--out", help="The HTML file to write.")] = Path(
+             "armkit-view.html")) -> None:
+    """Write an offline interactive 3-D view of a robot: links as collision capsules, frames."""
+    import numpy as np
+
+    from armkit.errors import InputError
+    from armkit.model.files import robot as load
+    from armkit.report.view import robot_view, write_view
+
+    model = load(robot)
+    if q:
+        values = []
+        for i, text in enumerate(q):
+            try:
+                values.append(float(text))
+            except ValueError:
+                raise InputError(f"q[{i}]: expected a number, found {text!r}") from None
+        if len(values) != model.n or not np.isfinite(values).all():
+            raise InputError(f"q: expected {model.n} finite joint values for {model.name}, "
+                             f"found {len(values)}")
+        q_si = model.q_to_si(values)
+    else:
+        q_si = np.clip(0.0, model.lower, model.upper)
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise InputError(f"--out: expected an .html file, found {out}")
+    output_folder(out.parent if str(out.parent) else Path("."))
+    write_view(robot_view(model, q_si, title=f"{model.name} at q = "
+                          f"{np.round(model.q_from_si(q_si), 3).tolist()}"), out)
+    stdout.print(f"view: {out}")

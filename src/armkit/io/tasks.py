@@ -1,0 +1,302 @@
+"""Task files: the end-to-end job of SPEC.md section 8 as one YAML file, in its declared units.
+
+::
+
+    name: fill the tender's tank
+    units: {length: mm, angle: deg}
+    robot: water_supply                  # a built-in name, or a robot file next to the task
+    camera: {xyz: [600, -200, 2200], rpy: [180, 0, 90]}    # the camera's pose in the base frame
+    target: {xyz: [500, 400, 1400], rpy: [180, 0, 60]}     # the target as the camera sees it
+    start: [0, 0, 0, 0]                  # where the simulated drive starts (joint values)
+    scene:                               # obstacles in the base frame, or `scene: FILE`
+      obstacles:
+        - {type: box, name: pillar, xyz: [900, 0, 800], size: [120, 120, 1600]}
+    planner: {name: rrtconnect, seed: 1, time_limit: 5, resolution: 5}
+    motion: {waypoints: 10, speed: 1.0}  # paper 1 sends 10 waypoints to the motors
+    drive: {host: 192.0.2.10, port: 502, map: drive.map.yaml}   # omitted: the simulated drive
+    report: task-report                  # the report's folder (the CLI's --out wins)
+
+Places kept for what comes next: ``camera`` will also take a hand-eye result file
+(``handeye: FILE``), and ``target`` a point cloud (``cloud: FILE``). Until then they are refused
+with a message that says so.
+
+Every mistake is one `ModelFileError`: file, field path, what was expected, what was found,
+with "did you mean" for a misspelled key.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import Field, ValidationError, field_validator
+
+from armkit.errors import ArmkitError, ModelFileError
+from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.model.robot import Units
+from armkit.spatial import pose_from_xyz_rpy
+
+# Task values are lengths of a workcell and angles: anything beyond these is a typo or a unit
+# mistake (metres written as millimetres twice), not a task.
+LARGEST_LENGTH_M = 1e3
+Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+
+
+def _finite(v: list[float] | float | None):
+    values = v if isinstance(v, list) else [v]
+    for x in values:
+        if x is not None and not math.isfinite(x):
+            raise ValueError(f"expected finite numbers, found {x}")
+    return v
+
+
+class UnitsField(StrictModel):
+    length: Literal["mm", "m"]
+    angle: Literal["deg", "rad"]
+
+
+class PoseField(StrictModel):
+    xyz: Vector3
+    rpy: Vector3 = [0.0, 0.0, 0.0]
+
+    _check = field_validator("xyz", "rpy")(_finite)
+
+
+class CameraField(PoseField):
+    """The camera's pose in the base frame."""
+
+
+class TargetField(StrictModel):
+    xyz: Vector3
+    rpy: Vector3 | None = None
+    yaw: float | None = None
+
+    _check = field_validator("xyz", "rpy", "yaw")(_finite)
+
+
+class ObstacleField(StrictModel):
+    type: Literal["box", "sphere", "cylinder", "capsule"]
+    name: str = ""
+    xyz: Vector3 | None = None          # centre (box, sphere, cylinder)
+    rpy: Vector3 = [0.0, 0.0, 0.0]
+    size: Vector3 | None = None         # box edges
+    radius: float | None = Field(None, gt=0)
+    length: float | None = Field(None, gt=0)
+    a: Vector3 | None = None            # capsule ends
+    b: Vector3 | None = None
+
+    _check = field_validator("xyz", "rpy", "size", "radius", "length", "a", "b")(_finite)
+
+
+class SceneField(StrictModel):
+    obstacles: list[ObstacleField] = []
+
+
+class PlannerField(StrictModel):
+    name: Literal["rrtconnect", "rrt", "rrtstar"] = "rrtconnect"
+    seed: int = 0
+    time_limit: float = Field(5.0, gt=0, le=3600)
+    max_iterations: int | None = Field(None, gt=0, le=10_000_000)
+    resolution: float | None = Field(None, gt=0)     # length units: how far any arm point moves
+    radius: float | None = Field(None, gt=0)         # default link capsules' radius, length units
+
+
+class MotionField(StrictModel):
+    waypoints: int = Field(10, ge=2, le=10_000)
+    speed: float = Field(1.0, gt=0, le=1)              # fraction of the joint limits
+
+
+class DriveField(StrictModel):
+    host: str = "127.0.0.1"
+    port: int = Field(502, ge=1, le=65535)
+    map: str | None = None
+    timeout: float = Field(1.0, gt=0, le=60)
+    arrival_timeout: float = Field(30.0, gt=0, le=3600)
+
+
+class TaskFile(StrictModel):
+    name: str = ""
+    description: str = ""
+    units: UnitsField
+    robot: str
+    camera: CameraField | None = None
+    handeye: str | None = None
+    target: TargetField
+    start: list[float] | None = None
+    scene: SceneField | str | None = None
+    planner: PlannerField = PlannerField()
+    motion: MotionField = MotionField()
+    drive: DriveField | None = None
+    report: str | None = None
+
+    _check = field_validator("start")(_finite)
+
+
+def parse_task(document: Any, path: str | Path = "<task>"):
+    """A `Task` (SI) from a parsed task document; relative file names are taken from the
+    task file's folder.
+
+    Raises
+    ------
+    ModelFileError
+        For any mistake: file, field, expected, found.
+    """
+    from armkit.task import Task  # the job's own object; io only reads files into it
+
+    where = str(path)
+    if not isinstance(document, dict):
+        raise ModelFileError(where, "top level", "a mapping of task fields",
+                             "nothing" if document is None else type(document).__name__)
+    try:
+        spec = TaskFile.model_validate(document)
+    except ValidationError as err:
+        raise validation_error(where, err, TaskFile) from None
+    folder = Path(path).parent if where != "<task>" else Path(".")
+    units = Units(spec.units.length, spec.units.angle)
+    if spec.handeye is not None:
+        raise ModelFileError(where, "handeye", "a camera pose (camera: {xyz, rpy}); hand-eye "
+                             "result files are not read yet", repr(spec.handeye))
+    if spec.camera is None:
+        raise ModelFileError(where, "camera", "the camera's pose in the base frame "
+                             "({xyz, rpy})", "nothing")
+    robot = _robot(spec.robot, folder, where)
+    T_base_camera = _pose(spec.camera.xyz, spec.camera.rpy, units, where, "camera")
+    target = spec.target
+    if target.rpy is not None and target.yaw is not None:
+        raise ModelFileError(where, "target", "rpy or yaw, not both", "both")
+    rpy = target.rpy if target.rpy is not None else [0.0, 0.0, target.yaw or 0.0]
+    T_camera_target = _pose(target.xyz, rpy, units, where, "target")
+    start = None
+    if spec.start is not None:
+        if len(spec.start) != robot.n:
+            raise ModelFileError(where, "start", f"{robot.n} joint values for {robot.name}",
+                                 f"{len(spec.start)}")
+        start = _joint_si(spec.start, robot, units)
+        outside = (start < robot.lower - 1e-12) | (start > robot.upper + 1e-12)
+        if outside.any():
+            j = int(np.flatnonzero(outside)[0])
+            raise ModelFileError(where, f"start[{j}]", f"a value within {robot.joint_names[j]}'s "
+                                 "limits", f"{spec.start[j]:g}")
+    scene = _scene(spec.scene, units, folder, where)
+    p = spec.planner
+    drive = spec.drive
+    drive_map = None
+    if drive is not None and drive.map is not None:
+        drive_map = _register_map(folder / drive.map, robot, where)
+    elif drive is not None:
+        raise ModelFileError(where, "drive.map", "the drive's register map file", "nothing")
+    return Task(
+        name=spec.name or Path(where).stem, robot=robot, units=units,
+        T_base_camera=T_base_camera, T_camera_target=T_camera_target,
+        start=start, scene=scene, planner=p.name, seed=p.seed,
+        time_limit=p.time_limit, max_iterations=p.max_iterations,
+        resolution=None if p.resolution is None else float(units.length_to_si(p.resolution)),
+        radius=None if p.radius is None else float(units.length_to_si(p.radius)),
+        waypoints=spec.motion.waypoints, speed=spec.motion.speed,
+        drive_host=None if drive is None else drive.host,
+        drive_port=None if drive is None else drive.port,
+        drive_map=drive_map, drive_timeout=1.0 if drive is None else drive.timeout,
+        arrival_timeout=30.0 if drive is None else drive.arrival_timeout,
+        report=None if spec.report is None else folder / spec.report)
+
+
+def load_task(path: str | Path):
+    """Read and validate a task file into a `Task` (SI).
+
+    Raises
+    ------
+    ModelFileError
+        Unreadable file, bad YAML, or any field that is wrong (file, field, expected, found).
+    """
+    return parse_task(read_yaml(path), path)
+
+
+def _robot(name: str, folder: Path, where: str):
+    from armkit.model.files import robot, robots
+
+    try:
+        if name in robots():
+            return robot(name)
+        return robot(folder / name)
+    except ModelFileError:
+        raise
+    except ArmkitError as err:
+        raise ModelFileError(where, "robot", "a built-in robot name or a robot file",
+                             f"{name!r} ({err})") from None
+
+
+def _joint_si(values: list[float], robot, units: Units) -> np.ndarray:
+    q = np.asarray(values, dtype=float)
+    revolute = np.asarray(robot.chain.revolute)
+    return np.where(revolute, units.angle_to_si(q), units.length_to_si(q))
+
+
+def _length(x, units: Units, where: str, field: str):
+    v = units.length_to_si(x)
+    if np.any(np.abs(v) > LARGEST_LENGTH_M):
+        raise ModelFileError(where, field, f"lengths within {LARGEST_LENGTH_M:g} m",
+                             f"{np.max(np.abs(v)):g} m")
+    return v
+
+
+def _pose(xyz, rpy, units: Units, where: str, field: str) -> np.ndarray:
+    return pose_from_xyz_rpy(_length(xyz, units, where, f"{field}.xyz"),
+                             units.angle_to_si(rpy))
+
+
+def _scene(spec, units: Units, folder: Path, where: str):
+    from armkit.planning import Box, Capsule, Cylinder, Scene, Sphere
+
+    if spec is None:
+        return Scene()
+    if isinstance(spec, str):
+        task = load_scene_file(folder / spec)
+        return task
+    obstacles = []
+    for i, o in enumerate(spec.obstacles):
+        at = f"scene.obstacles[{i}]"
+        need = {"box": ("xyz", "size"), "sphere": ("xyz", "radius"),
+                "cylinder": ("xyz", "radius", "length"), "capsule": ("a", "b", "radius")}[o.type]
+        for name in need:
+            if getattr(o, name) is None:
+                raise ModelFileError(where, f"{at}.{name}", f"a value for a {o.type}", "nothing")
+        T = None if o.xyz is None else _pose(o.xyz, o.rpy, units, where, at)
+        si = {name: _length(getattr(o, name), units, where, f"{at}.{name}")
+              for name in ("size", "radius", "length", "a", "b") if getattr(o, name) is not None}
+        if o.type == "box":
+            obstacles.append(Box(si["size"], T, o.name))
+        elif o.type == "sphere":
+            obstacles.append(Sphere(T[:3, 3], float(si["radius"]), o.name))
+        elif o.type == "cylinder":
+            obstacles.append(Cylinder(float(si["radius"]), float(si["length"]), T, o.name))
+        else:
+            obstacles.append(Capsule(si["a"], si["b"], float(si["radius"]), o.name))
+    return Scene(tuple(obstacles))
+
+
+def load_scene_file(path: Path):
+    """A scene file: the task's ``scene`` section on its own, with its own units."""
+    document = read_yaml(path)
+    where = str(path)
+    if not isinstance(document, dict):
+        raise ModelFileError(where, "top level", "a mapping with units and obstacles",
+                             "nothing" if document is None else type(document).__name__)
+
+    class SceneFile(StrictModel):
+        units: UnitsField
+        obstacles: list[ObstacleField] = []
+
+    try:
+        spec = SceneFile.model_validate(document)
+    except ValidationError as err:
+        raise validation_error(where, err, SceneFile) from None
+    return _scene(SceneField(obstacles=spec.obstacles),
+                  Units(spec.units.length, spec.units.angle), path.parent, where)
+
+
+def _register_map(path: Path, robot, where: str):
+    from armkit.drives import load_register_map
+
+    return load_register_map(path, robot)
