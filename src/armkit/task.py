@@ -419,8 +419,7 @@ def _send(result: JobResult, client) -> bool:
 def _arrive(result: JobResult, client, drive_map) -> bool:
     """Wait (bounded) until the drive reports its joints at the last waypoint and still."""
     target = result.q[-1]
-    count = np.array([1.0 / j.scale for j in drive_map.joints])
-    tolerance = drive_map.robot.q_to_si(ARRIVAL_COUNTS * count) + 1e-9
+    tolerance = 2 * ARRIVAL_COUNTS * half_count(drive_map, target) + 1e-12
     started = result.timings.pop("started")
     deadline = time.perf_counter() + result.task.arrival_timeout
     times, seen = list(result.executed_t), list(result.executed_q)
@@ -450,6 +449,16 @@ def _arrive(result: JobResult, client, drive_map) -> bool:
     return True
 
 
+def half_count(drive_map, q: NDArray) -> NDArray:
+    """Half of one count of each joint's register near q (n,), rad or m: how far a value can
+    move when the drive stores it (integers: 1 / scale; float32: its relative precision)."""
+    robot = drive_map.robot
+    q_file = np.abs(robot.q_from_si(q))
+    count = np.array([max(v, 1.0) * 2.0 ** -23 if j.type == "float32" else 1.0 / j.scale
+                      for j, v in zip(drive_map.joints, q_file)])
+    return 0.5 * robot.q_to_si(count)
+
+
 def _check(result: JobResult, drive_map) -> None:
     """Tool position at the drive's final joints against the target, and the error the drive's
     resolution alone allows there."""
@@ -459,9 +468,9 @@ def _check(result: JobResult, drive_map) -> None:
     robot = result.task.robot
     T = fk(robot, result.q_final)
     result.position_error = float(np.linalg.norm(T[:3, 3] - result.T_base_target[:3, 3]))
-    half_count = 0.5 * robot.q_to_si(np.array([1.0 / j.scale for j in drive_map.joints]))
     J = jacobian(robot, result.q_final)
-    result.resolution = float(np.linalg.norm(np.abs(J[:3]) @ half_count))
+    result.resolution = float(np.linalg.norm(np.abs(J[:3]) @ half_count(drive_map,
+                                                                         result.q_final)))
     result.success = result.position_error <= result.resolution + 1e-9
     result.reason = "ok" if result.success else (
         f"the tool is {result.position_error * 1e3:.3f} mm from the target, more than the "
