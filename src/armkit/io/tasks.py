@@ -8,7 +8,7 @@
     camera: {xyz: [600, -200, 2200], rpy: [180, 0, 90]}    # the camera's pose in the base frame
     target: {xyz: [500, 400, 1400], rpy: [180, 0, 60]}     # the target as the camera sees it
     start: [0, 0, 0, 0]                  # where the simulated drive starts (joint values)
-    scene:                               # obstacles in the base frame, or `scene: FILE`
+    scene:                               # obstacles in the base frame (and/or file: FILE)
       obstacles:
         - {type: box, name: pillar, xyz: [900, 0, 800], size: [120, 120, 1600]}
     planner: {name: rrtconnect, seed: 1, time_limit: 5, resolution: 5}
@@ -91,6 +91,7 @@ class ObstacleField(StrictModel):
 
 
 class SceneField(StrictModel):
+    file: str | None = None             # a scene file (its own units), relative to the task
     obstacles: list[ObstacleField] = []
 
 
@@ -125,7 +126,7 @@ class TaskFile(StrictModel):
     handeye: str | None = None
     target: TargetField
     start: list[float] | None = None
-    scene: SceneField | str | None = None
+    scene: SceneField | None = None
     planner: PlannerField = PlannerField()
     motion: MotionField = MotionField()
     drive: DriveField | None = None
@@ -251,10 +252,9 @@ def _scene(spec, units: Units, folder: Path, where: str):
 
     if spec is None:
         return Scene()
-    if isinstance(spec, str):
-        task = load_scene_file(folder / spec)
-        return task
     obstacles = []
+    if spec.file is not None:
+        obstacles += load_scene_file(folder / spec.file).obstacles
     for i, o in enumerate(spec.obstacles):
         at = f"scene.obstacles[{i}]"
         need = {"box": ("xyz", "size"), "sphere": ("xyz", "radius"),
