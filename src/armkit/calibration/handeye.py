@@ -387,7 +387,11 @@ def _convention(G: NDArray, C: NDArray) -> str | None:
                     "the camera poses inverted (camera-in-target given as target-in-camera?)":
                     fit(G, invert(C)),
                     "both robot and camera poses inverted": fit(invert(G), invert(C))}
-    what, best = min(alternatives.items(), key=lambda item: item[1])
+    best = min(alternatives.values())
+    # Inverting the robot poses and inverting the camera poses can fit equally well (the
+    # motions are then conjugate through W instead of X): name every one that fits as well.
+    what = " or ".join(w for w, fit_ in sorted(alternatives.items(), key=lambda item: item[1])
+                       if fit_ <= 2 * best + 1e-12)
     if given > MAX_ROTATION_RESIDUAL or (given > 1e-9 and given > CONVENTION_RATIO * best):
         hint = (f"; they fit {given / max(best, 1e-300):.3g}x better with {what}"
                 if given > CONVENTION_RATIO * best else "")
