@@ -17,6 +17,10 @@ from armkit.model import Robot, load_robot, robot, robots, save_robot
 from armkit.trajectory import (Trajectory, cubic, jerk_limited, quintic, retime, spline,
                                tool_motion, trapezoidal)
 from armkit.workspace import Section, Workspace, workspace
+from armkit.calibration import (AccuracyReport, CalibrationResult, CameraMount, HandEyeResult,
+                                accuracy_report, calibrate, handeye, points_to_base, poses_to_base,
+                                select_poses)
+from armkit.io.camera import read_camera_mount
 
 # Loaded on first use, so that `import armkit` does not pay for pymodbus (about 0.1 s).
 _DRIVES = ("load_register_map", "check_waypoints", "send_waypoints", "DriveClient", "SimDrive")
@@ -37,4 +41,7 @@ __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot",
            "singular_values", "manipulability", "min_singular_value", "condition_number",
            "ik", "ik_solutions", "IKResult", "IKSolutions", "Trajectory", "cubic", "quintic",
            "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", "workspace",
-           "Workspace", "Section", *_DRIVES]
+           "Workspace", "Section", *_DRIVES,
+           "handeye", "HandEyeResult", "calibrate", "CalibrationResult", "select_poses",
+           "accuracy_report", "AccuracyReport", "CameraMount", "points_to_base", "poses_to_base",
+           "read_camera_mount"]

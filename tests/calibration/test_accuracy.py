@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armkit.calibration.accuracy import accuracy
+from armkit.calibration.accuracy import accuracy_report
 from armkit.errors import InputError
 from armkit.io.measurements import read_accuracy
 from armkit.report.calibration import accuracy_figure, save_figure
@@ -22,7 +22,7 @@ MEASURED = np.array([(202, 296, 503), (304, 455, 901), (-505, 192, 147), (-305, 
 
 
 def test_paper_3_points_within_one_centimetre():
-    report = accuracy(COMMANDED / 1000, MEASURED / 1000, tolerance=0.01)
+    report = accuracy_report(COMMANDED / 1000, MEASURED / 1000, tolerance=0.01)
     by_hand = np.sqrt([4 + 16 + 9, 16 + 25 + 1, 25 + 64 + 9, 25 + 9 + 9, 25 + 9 + 16]) / 1000
     assert np.allclose(report.distances, by_hand, rtol=1e-12)
     assert report.max == pytest.approx(np.sqrt(98) / 1000) and report.max < 0.01
@@ -31,8 +31,8 @@ def test_paper_3_points_within_one_centimetre():
     assert report.rms == pytest.approx(np.sqrt(np.mean(by_hand ** 2)))
     assert np.allclose(report.bias, np.array([1, -7, 0]) / 5 / 1000, atol=1e-15)
     assert np.allclose(report.errors, (MEASURED - COMMANDED) / 1000)
-    assert accuracy(COMMANDED / 1000, MEASURED / 1000, tolerance=0.009).within is False
-    assert accuracy(COMMANDED / 1000, MEASURED / 1000).within is None
+    assert accuracy_report(COMMANDED / 1000, MEASURED / 1000, tolerance=0.009).within is False
+    assert accuracy_report(COMMANDED / 1000, MEASURED / 1000).within is None
 
 
 def test_example_file_is_the_papers_table():
@@ -44,7 +44,7 @@ def test_example_file_is_the_papers_table():
 
 def test_figure_is_written(tmp_path):
     data = read_accuracy(EXAMPLE)
-    fig = accuracy_figure(accuracy(data.commanded, data.measured, 0.01), data.units)
+    fig = accuracy_figure(accuracy_report(data.commanded, data.measured, 0.01), data.units)
     left, right = fig.axes
     assert left.get_ylabel() == "measured - commanded (mm)"
     assert right.get_ylabel() == "|measured - commanded| (mm)"
@@ -54,16 +54,16 @@ def test_figure_is_written(tmp_path):
 
 
 def test_one_point_and_bad_input():
-    one = accuracy([[0, 0, 0]], [[0, 0, 0.003]])
+    one = accuracy_report([[0, 0, 0]], [[0, 0, 0.003]])
     assert one.max == pytest.approx(0.003) and np.all(one.std == 0)
     with pytest.raises(InputError, match=r"measured: expected shape \(2, 3\) \(one per "
                                          r"commanded point\), found \(3, 3\)"):
-        accuracy(np.zeros((2, 3)), np.zeros((3, 3)))
+        accuracy_report(np.zeros((2, 3)), np.zeros((3, 3)))
     with pytest.raises(InputError, match=r"commanded: expected shape \(\.\.\., 3\)"):
-        accuracy(np.zeros((2, 2)), np.zeros((2, 2)))
+        accuracy_report(np.zeros((2, 2)), np.zeros((2, 2)))
     with pytest.raises(InputError, match="measured: expected finite numbers"):
-        accuracy(np.zeros((1, 3)), [[np.nan, 0, 0]])
+        accuracy_report(np.zeros((1, 3)), [[np.nan, 0, 0]])
     with pytest.raises(InputError, match=r"commanded: expected shape \(m, 3\) with m >= 1"):
-        accuracy(np.zeros((0, 3)), np.zeros((0, 3)))
+        accuracy_report(np.zeros((0, 3)), np.zeros((0, 3)))
     with pytest.raises(InputError, match="tolerance: expected a positive length, found -1"):
-        accuracy(np.zeros((1, 3)), np.zeros((1, 3)), tolerance=-1)
+        accuracy_report(np.zeros((1, 3)), np.zeros((1, 3)), tolerance=-1)

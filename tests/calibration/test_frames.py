@@ -5,12 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armkit.calibration.frames import (CameraMount, camera_mount, camera_to_base,
-                                       point_covariance_in_base, points_to_base, poses_to_base)
+from armkit.calibration.frames import (
+    CameraMount,
+    camera_mount,
+    camera_to_base,
+    point_covariance_in_base,
+    points_to_base,
+    poses_to_base,
+)
 from armkit.calibration.handeye import handeye
 from armkit.errors import InputError
 from armkit.spatial import exp_so3, invert, pose_from_xyz_rpy
-
 from tests.calibration.synthetic import handeye_data, pose
 
 

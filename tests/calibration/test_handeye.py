@@ -10,7 +10,6 @@ from hypothesis import strategies as st
 from armkit.calibration.handeye import METHODS, handeye
 from armkit.errors import InputError
 from armkit.spatial import invert, rotation_angle
-
 from tests.calibration.synthetic import OPENCV_METHODS, errors, handeye_data, opencv, pose
 
 

@@ -9,11 +9,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import armkit
-from armkit.calibration.identify import (calibrate, evaluate, identifiability, identified_robot,
-                                         parametric_model, select_poses)
+from armkit.calibration.identify import (
+    calibrate,
+    evaluate,
+    identifiability,
+    identified_robot,
+    parametric_model,
+    select_poses,
+)
 from armkit.errors import InputError
 from armkit.model import Robot
-
 from tests.helpers import random_q
 
 PAPER_ROBOTS = ["water_supply", "modular_4dof", "inspection_6dof"]

@@ -15,7 +15,6 @@ import armkit
 from armkit.io.camera import read_camera_mount
 from armkit.io.measurements import read_measurements
 from armkit.spatial import invert
-
 from tests.calibration.synthetic import handeye_data
 
 EXAMPLES = Path(__file__).parents[2] / "examples" / "calibration"

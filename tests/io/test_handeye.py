@@ -17,7 +17,6 @@ from armkit.io.camera import read_camera_mount
 from armkit.io.handeye import read_handeye_poses, write_handeye_result
 from armkit.model import Units
 from armkit.spatial import invert, matrix_to_quat, matrix_to_rpy
-
 from tests.calibration.synthetic import handeye_data
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "calibration" / "handeye_poses.yaml"

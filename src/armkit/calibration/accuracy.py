@@ -51,7 +51,7 @@ class AccuracyReport:
     within: bool | None
 
 
-def accuracy(commanded: ArrayLike, measured: ArrayLike,
+def accuracy_report(commanded: ArrayLike, measured: ArrayLike,
              tolerance: float | None = None) -> AccuracyReport:
     """Per-point error and its statistics.
 
@@ -73,7 +73,7 @@ def accuracy(commanded: ArrayLike, measured: ArrayLike,
 
     Example
     -------
-    >>> accuracy([[0.2, 0.3, 0.5]], [[0.202, 0.296, 0.503]]).max
+    >>> accuracy_report([[0.2, 0.3, 0.5]], [[0.202, 0.296, 0.503]]).max
     0.00538...
     """
     c = as_array(commanded, "commanded", (3,))

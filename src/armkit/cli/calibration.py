@@ -9,7 +9,7 @@ import numpy as np
 import typer
 
 import armkit
-from armkit.calibration.accuracy import accuracy
+from armkit.calibration.accuracy import accuracy_report
 from armkit.calibration.handeye import METHODS, handeye
 from armkit.calibration.identify import calibrate, dependency_text, select_poses
 from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
@@ -90,7 +90,7 @@ def handeye_command(
 
 def _show_handeye(doc: dict) -> None:
     L, A = doc["units"]["length"], doc["units"]["angle"]
-    fmt = lambda v: " ".join(f"{x:.6g}" for x in v)  # noqa: E731
+    fmt = lambda v: " ".join(f"{x:.6g}" for x in v)
     stdout.print(f"hand-eye {doc['mode']} ({doc['method']}), {doc['poses']} pose pairs")
     for key in ("X", "target"):
         stdout.print(f"{doc[key]['frame']}: xyz ({L}) {fmt(doc[key]['xyz'])}   rpy ({A}) "
@@ -245,7 +245,7 @@ def accuracy_command(
     if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
         raise InputError(f"--tolerance: expected a positive length in {u.length}, found "
                          f"{tolerance:g}")
-    report = accuracy(data.commanded, data.measured,
+    report = accuracy_report(data.commanded, data.measured,
                       None if tolerance is None else float(u.length_to_si(tolerance)))
     def length(x):          # file units, without the last-bit noise of the mm <-> m round trip
         return np.round(u.length_from_si(x), 9)

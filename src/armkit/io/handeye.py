@@ -43,8 +43,8 @@ from pydantic import Field, ValidationError, model_validator
 
 from armkit.calibration.handeye import HandEyeResult
 from armkit.errors import InputError, ModelFileError
-from armkit.kinematics.forward import fk
 from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.kinematics.forward import fk
 from armkit.model.files import robot as load_named_robot
 from armkit.model.robot import Units
 from armkit.spatial import invert, matrix_to_rpy, quat_to_matrix, rpy_to_matrix
