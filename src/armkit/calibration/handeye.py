@@ -299,7 +299,7 @@ def _gauss_newton(residual, jacobian, update, state, iterations=50):
     for _ in range(iterations):
         J = jacobian(state)
         step = np.linalg.lstsq(J, -r, rcond=None)[0]
-        for _ in range(20):
+        for _ in range(10):
             trial = update(state, step)
             r_trial = residual(trial)
             if r_trial @ r_trial <= cost:

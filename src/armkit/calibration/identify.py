@@ -24,6 +24,7 @@ det(J^T J) of the identifiable set (greedy D-optimal design).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -38,6 +39,7 @@ from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_array, as_transform, invert, log_so3, translation
 
 PARTS = ("table", "base", "tool")
+_PLANES = ((1, 2), (2, 0), (0, 1))     # the columns a rotation about x, y or z mixes
 _AXES = {"rx": (0, True), "ry": (1, True), "rz": (2, True),
          "tx": (0, False), "ty": (1, False), "tz": (2, False)}
 
@@ -213,16 +215,17 @@ def evaluate(model: ParametricModel, params: NDArray, Q: NDArray,
         if isinstance(f, np.ndarray):
             T = np.einsum("jk,jim->kim", f, T)
             continue
-        v = np.zeros(m)
-        if f.param >= 0:
-            v = v + params[f.param]
         if f.joint >= 0:
-            v = v + Q[:, f.joint]
+            v = Q[:, f.joint] + params[f.param] if f.param >= 0 else Q[:, f.joint]
+            c_s = (np.cos, np.sin)
+        else:                                # one amount for the whole batch: a scalar
+            v = float(params[f.param])
+            c_s = (math.cos, math.sin)
         v = f.sign * v
         axis, rotation = _AXES[f.kind]
         if rotation:
-            i, j = [(1, 2), (2, 0), (0, 1)][axis]
-            c, s = np.cos(v), np.sin(v)
+            i, j = _PLANES[axis]
+            c, s = c_s[0](v), c_s[1](v)
             T[i], T[j] = c * T[i] + s * T[j], c * T[j] - s * T[i]
         else:
             T[3] = T[3] + v * T[axis]
@@ -295,7 +298,7 @@ def identifiability(J: NDArray, names, rank_tol: float = 1e-7,
     rank = int(np.sum(d > rank_tol * d[0]))
     kept, dropped = live[piv[:rank]], live[piv[rank:]]
     if dropped.size:
-        coef = scipy.linalg.solve_triangular(R[:rank, :rank], R[:rank, rank:])
+        coef = np.linalg.solve(R[:rank, :rank], R[:rank, rank:])
         for c, k in zip(coef.T, dropped):
             # back to the parameters' own units
             scale = (norms[k] / norms[kept]) * (priority[kept] / priority[k])
@@ -445,7 +448,7 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
     cost, done = r @ r, 0
     for done in range(1, iterations + 1):
         step = _gauss_newton_step(J[:, free], r)
-        for _ in range(30):
+        for _ in range(10):                  # halve a step that does not lower the cost
             trial = params.copy()
             trial[free] += step
             T_trial, r_trial, J_trial = rows(trial)
@@ -453,10 +456,10 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
                 break
             step /= 2
         else:
-            break
+            break                            # converged to rounding: no step lowers the cost
         improved = cost - r_trial @ r_trial
         params, T, r, J, cost = trial, T_trial, r_trial, J_trial, r_trial @ r_trial
-        if improved <= 1e-16 * max(cost, 1e-300) or np.abs(step).max() < 1e-14:
+        if improved <= 1e-12 * cost or np.abs(step).max() < 1e-14:
             break
     Jf = J[:, free]
     norms = np.linalg.norm(Jf, axis=0)
