@@ -260,12 +260,12 @@ def kinematic(quick):
     for label, robot, n, chosen, every in cases:
         rng = np.random.default_rng(n)
         q, measured, hold, hold_p, result = _trial(robot, n, chosen, every, rng)
-        t = timings(lambda: calibrate(robot, q, measured), rounds=5, repeat=1)
+        t = timings(lambda r=robot, q=q, m=measured: calibrate(r, q, m), rounds=5, repeat=1)
         model, params = scipy_reference(robot, q, measured)
         ref_hold = np.linalg.norm(evaluate(model, params, hold, False)[0][:, :3, 3] - hold_p,
                                   axis=-1)
-        tr = timings(lambda: scipy_reference(robot, q, measured), rounds=3 if quick else 5,
-                     repeat=1)
+        tr = timings(lambda r=robot, q=q, m=measured: scipy_reference(r, q, m),
+                     rounds=3 if quick else 5, repeat=1)
         name = (f"{label}, {n}" + (" chosen (D-optimal from 500)" if chosen else " random")
                 + ("" if every else ", only identifiable parameters off nominal"))
         print(f"| {name} | {result.holdout_before.mean() * 1e3:.3f} -> "

@@ -1,4 +1,5 @@
-"""`armkit handeye POSES.yaml`, `armkit calibrate ROBOT MEASUREMENTS.csv`, `armkit accuracy FILE`."""
+"""`armkit handeye POSES.yaml`, `armkit calibrate ROBOT MEASUREMENTS.csv`,
+`armkit accuracy FILE`."""
 
 from __future__ import annotations
 
@@ -90,7 +91,10 @@ def handeye_command(
 
 def _show_handeye(doc: dict) -> None:
     L, A = doc["units"]["length"], doc["units"]["angle"]
-    fmt = lambda v: " ".join(f"{x:.6g}" for x in v)
+
+    def fmt(values) -> str:
+        return " ".join(f"{x:.6g}" for x in values)
+
     stdout.print(f"hand-eye {doc['mode']} ({doc['method']}), {doc['poses']} pose pairs")
     for key in ("X", "target"):
         stdout.print(f"{doc[key]['frame']}: xyz ({L}) {fmt(doc[key]['xyz'])}   rpy ({A}) "
