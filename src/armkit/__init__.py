@@ -34,11 +34,19 @@ _HOMES = {
     **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
     **dict.fromkeys(("load_register_map", "check_waypoints", "send_waypoints", "DriveClient",
                      "SimDrive"), "armkit.drives"),
+    **dict.fromkeys(("handeye", "HandEyeResult", "calibrate", "CalibrationResult",
+                     "select_poses", "accuracy_report", "AccuracyReport", "CameraMount",
+                     "points_to_base", "poses_to_base"), "armkit.calibration"),
+    "read_camera_mount": "armkit.io.camera",
 }
 
 if TYPE_CHECKING:       # what the names are, for readers and type checkers
+    from armkit.calibration import (AccuracyReport, CalibrationResult, CameraMount,
+                                    HandEyeResult, accuracy_report, calibrate, handeye,
+                                    points_to_base, poses_to_base, select_poses)
     from armkit.drives import (DriveClient, SimDrive, check_waypoints, load_register_map,
                                send_waypoints)
+    from armkit.io.camera import read_camera_mount
     from armkit.kinematics.forward import fk, fk_frames
     from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
     from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,
