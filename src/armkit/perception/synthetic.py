@@ -204,7 +204,7 @@ def synthetic_scene(kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.
         if depth is None:
             t, dirs = t[~in_hole], dirs[~in_hole]
         else:
-            t_back = -(d_plane - depth) / (dirs @ normal)
+            t_back = -(d_plane + depth) / (dirs @ normal)
             t = np.where(in_hole, t_back, t)
     t = t + rng.normal(0.0, noise, len(t))
     points = dirs * t[:, None]

@@ -340,7 +340,6 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
         return None, "wall too sparse for the hole search", np.zeros(n, bool), np.zeros((0, 2))
     occupied = np.zeros(shape, bool)
     occupied[ij[:, 0], ij[:, 1]] = True
-    occupied = ndimage.binary_closing(occupied, iterations=1) | occupied
     regions, count = ndimage.label(~occupied)
     if count == 0:
         return None, "no opening in the wall", np.zeros(n, bool), np.zeros((0, 2))
@@ -350,7 +349,7 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
     sizes[border] = 0
     area = sizes * cell * cell
     r_area = np.sqrt(area / np.pi)
-    ok = (area > 0) & (r_area <= max_extent) & (r_area >= 2 * cell)
+    ok = (area > 0) & (r_area <= max_extent) & (r_area >= cell)   # >= about 3 cells across
     if radius is not None:
         ok &= (r_area > 0.5 * radius) & (r_area < 1.5 * radius)
     if not ok.any():
