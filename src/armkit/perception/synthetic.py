@@ -9,6 +9,8 @@ nearest surface it meets, then moved along the ray by Gaussian range noise. Outl
 drawn uniformly in the scene's bounding box. Rays form a regular azimuth-elevation grid, or, with
 `rings`, a few elevation rings densely sampled in azimuth, as a spinning multi-beam LiDAR scans.
 
+By default the inside of the pipe is dark (no returns), so only its sensor-facing side is seen.
+
 Ground truth: for a pipe, the target frame's origin is the centre of the pipe's mouth (its open
 end); for a hole, the hole's centre on the wall. Its z axis is the inlet's axis, the wall's
 normal pointing out of the wall toward the sensor; its y axis is the sensor's z (up) projected on
@@ -111,12 +113,12 @@ def _ray_directions(n_rays: int, half_az: float, half_el: float, rings: int | No
 
 
 def _cylinder_hits(d: NDArray, centre: NDArray, axis: NDArray, radius: float,
-                   length: float) -> NDArray:
-    """Range along each ray d (M, 3) from the origin to a thin-walled open cylinder (inf if none).
+                   length: float) -> tuple[NDArray, NDArray, NDArray]:
+    """Rays d (M, 3) from the origin against a thin-walled open cylinder.
 
-    The cylinder's axis runs from `centre` (on the wall) along `axis` for `length`; the nearer
-    crossing with the axial coordinate in [0, length] is taken, so a ray entering the open mouth
-    meets the inner far side.
+    The cylinder's axis runs from `centre` (on the wall) along `axis` for `length`. Returns the
+    range to the outer surface (inf where the ray misses it), which rays enter the open mouth,
+    and their range to the inner far side.
     """
     o = -centre                                   # ray origin relative to the cylinder base
     d_perp = d - np.outer(d @ axis, axis)
@@ -135,7 +137,8 @@ def _cylinder_hits(d: NDArray, centre: NDArray, axis: NDArray, radius: float,
         s = s0 + t * s1
         return ok & (t > 0) & (s >= 0) & (s <= length)
 
-    return np.where(valid(t_near), t_near, np.where(valid(t_far), t_far, np.inf))
+    near_ok, far_ok = valid(t_near), valid(t_far)
+    return np.where(near_ok, t_near, np.inf), far_ok & ~near_ok, np.where(far_ok, t_far, np.inf)
 
 
 def synthetic_scene(kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.002,
@@ -143,7 +146,7 @@ def synthetic_scene(kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.
                     pitch: float = 0.1, offset: tuple[float, float] = (0.05, -0.03),
                     radius: float = 0.04, length: float = 0.10, depth: float | None = 0.15,
                     window: float = 0.8, outliers: float = 0.01, rings: int | None = None,
-                    seed: int | None = 0) -> SyntheticScene:
+                    interior: bool = False, seed: int | None = 0) -> SyntheticScene:
     """A scan of a train wall with a pipe inlet or a hole, and its ground truth.
 
     Parameters
@@ -171,6 +174,9 @@ def synthetic_scene(kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.
         Fraction of points replaced by uniform outliers, 0 .. 1.
     rings : int or None
         Number of scan rings (elevation lines); None for a regular grid.
+    interior : bool
+        Whether rays entering the pipe's open mouth return from its inner far side; by default
+        the inside is dark (no return), so only the sensor-facing side of the pipe is seen.
     seed : int or None
 
     Returns
@@ -197,7 +203,12 @@ def synthetic_scene(kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.
     dirs = _ray_directions(n_rays, half, half, rings, rng)
     t = -d_plane / (dirs @ normal)                # every ray meets the (infinite) wall
     if kind == "pipe":
-        t = np.minimum(t, _cylinder_hits(dirs, centre, normal, radius, length))
+        outer, into_mouth, inner = _cylinder_hits(dirs, centre, normal, radius, length)
+        t = np.minimum(t, outer)
+        if interior:
+            t = np.where(into_mouth, inner, t)
+        else:                                     # a dark inside: no return
+            t, dirs = t[~into_mouth], dirs[~into_mouth]
     else:
         on_wall = dirs * t[:, None]
         in_hole = np.linalg.norm(on_wall - centre, axis=1) < radius
@@ -226,13 +237,16 @@ def synthetic_scene(kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.
 
 def random_scene(seed: int, kind: Literal["pipe", "hole"] = "pipe", *, noise: float = 0.002,
                  n_points: int = 20_000, **kwargs) -> SyntheticScene:
-    """A scene with its pose drawn from `seed`: yaw +-35 deg, pitch +-15 deg, distance
-    1.2 .. 2.0 m, the inlet within +-0.15 m of the point straight ahead.
+    """A scene with its pose drawn from `seed`: the wall turned 15 .. 40 deg either way about
+    the vertical (the sensor looks at the train's side at an angle, so that it sees the side of
+    the pipe), pitch +-10 deg, distance 1.2 .. 2.0 m, the inlet within +-0.15 m of the point
+    straight ahead.
 
     Other keyword arguments go to `synthetic_scene`.
     """
     rng = np.random.default_rng([seed, 18])
-    yaw, pitch = np.deg2rad(rng.uniform(-35, 35)), np.deg2rad(rng.uniform(-15, 15))
+    yaw = np.deg2rad(rng.uniform(15, 40)) * rng.choice([-1.0, 1.0])
+    pitch = np.deg2rad(rng.uniform(-10, 10))
     params = dict(distance=float(rng.uniform(1.2, 2.0)), yaw=float(yaw), pitch=float(pitch),
                   offset=tuple(rng.uniform(-0.15, 0.15, 2)))
     params.update(kwargs)

@@ -5,7 +5,8 @@ Pipeline (each step a public function of `armkit.perception`):
 1. optional voxel down-sampling (`voxel_downsample`);
 2. the wall: `ransac_plane` (adaptive RANSAC, least-squares refits);
 3. candidates: points more than `min_height` off the wall on the sensor's side;
-4. optional statistical outlier removal among the candidates (`statistical_outliers`);
+4. optional statistical outlier removal among the candidates (`statistical_outliers`; off by
+   default, see `detect_target`);
 5. clusters: `dbscan` on a k-d tree;
 6. the target cluster, by the rule `choose` (below);
 7. a pipe: a circle fitted in the wall's plane to the cluster's points projected on it
@@ -15,7 +16,8 @@ Pipeline (each step a public function of `armkit.perception`):
    around the inlet and the circle fitted again.
    A hole: the empty region of the wall's inliers (an occupancy grid), then its rim: per
    angular sector the innermost wall point and, where rays went through the hole, the outermost
-   crossing of those rays with the wall; the circle is fitted to the middle of the two.
+   crossing of those rays with the wall; the circle is fitted to the middle of the two, or,
+   without rays through, to the innermost wall points moved in by half the point spacing.
 
 The target frame (see `armkit.perception.synthetic`): z the inlet's axis (the wall's normal,
 pointing out of the wall toward the sensor: the pipe is taken to stand square to the wall), y the
@@ -331,7 +333,7 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
     n = len(p)
     origin = -plane.offset * plane.normal
     inl = plane.inliers
-    xy = np.column_stack([(p[inl] - origin) @ u, (p[inl] - origin) @ v])
+    xy = np.column_stack([p[inl] @ u, p[inl] @ v])
     cell = 2.5 * _spacing(xy)
     lo = xy.min(axis=0)
     ij = np.floor((xy - lo) / cell).astype(np.int64)
@@ -359,6 +361,16 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
     cells = np.argwhere(regions == best)
     rough = lo + (cells.mean(axis=0) + 0.5) * cell
     rho = float(np.sqrt(len(cells) / np.pi) * cell)
+    # A gap in the wall can be the shadow of something standing in front of it (a pipe): the
+    # rays of such points, carried on to the wall, land in the gap.
+    h_all = p @ plane.normal + plane.offset
+    front = p[h_all > max(threshold, 4 * plane.rms)]
+    landing = front * (-plane.offset / (front @ plane.normal))[:, None]
+    xy_front = np.column_stack([landing @ u, landing @ v])
+    covering = int((np.linalg.norm(xy_front - rough, axis=1) < 2 * rho + 2 * cell).sum())
+    if covering >= 10:
+        return None, (f"the gap in the wall lies behind {covering} points standing off it "
+                      "(an object, not an opening)"), np.zeros(n, bool), np.zeros((0, 2))
 
     sectors = 90
     def innermost(points2: NDArray, outer: bool) -> tuple[NDArray, NDArray]:
@@ -381,10 +393,16 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
     rim_mask = np.zeros(n, bool)
     rim_mask[wall_idx[np.flatnonzero(near)[pick_w]]] = True
 
-    # Rays through the hole: returns behind the wall, carried back along their ray to the wall.
+    # Rays through the hole: returns behind the wall, carried back along their ray to the wall;
+    # where a sector has both, the edge is taken midway between the two.
     h = p @ plane.normal + plane.offset
     behind = h < -threshold
-    rim = rim_wall.copy()
+    # Where no ray went through, the edge lies on average half a spacing inside the innermost
+    # wall point (between it and the next sample, which fell into the hole).
+    spacing = cell / 2.5
+    radial = rim_wall - rough
+    radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-12)
+    rim = rim_wall - 0.5 * spacing * radial
     if behind.sum() >= 3:
         q = p[behind]
         scale = -plane.offset / (q @ plane.normal)
@@ -410,7 +428,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
                   min_height: float | None = None, eps: float | None = None,
                   min_samples: int = 5, min_cluster: int = 30, max_extent: float = 0.3,
                   choose: Literal["largest", "nearest", "highest"] = "largest",
-                  voxel: float | None = None, outlier_filter: bool = True,
+                  voxel: float | None = None, outlier_filter: bool = False,
                   seed: int | None = 0) -> TargetResult:
     """Find the water inlet (a pipe or a hole in the wall) in a scan of the train's side.
 
@@ -446,7 +464,10 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     voxel : float or None
         Voxel down-sampling edge (m), None for none.
     outlier_filter : bool
-        Remove statistical outliers among the candidates (k = 8, 2 standard deviations).
+        Remove statistical outliers among the candidates (k = 8, 2 standard deviations) before
+        clustering. Off by default: DBSCAN leaves isolated points out already, and the filter
+        judges by the candidates' mean density, so a dense object beside the inlet can make
+        the inlet's own points look like outliers.
     seed : int or None
         RANSAC's seed.
 
@@ -517,7 +538,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
         info["candidate_mask"] = cand_mask
         if cand_mask.sum() < min_cluster:
             info["candidates"] = int(cand_mask.sum())
-            return _fail(f"no target: {int(cand_mask.sum())} point(s) stand more than "
+            return _fail(f"only {int(cand_mask.sum())} point(s) stand more than "
                          f"{floor * 1e3:.1f} mm off the wall on the sensor's side (fewer than "
                          f"{min_cluster})", kind, radius, p, plane, info)
         cand_idx = np.flatnonzero(cand_mask)
