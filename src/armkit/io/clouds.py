@@ -112,8 +112,9 @@ def _header_lines(path: str, raw: bytes, what: str, first: tuple[bytes, ...], en
     """Split an ASCII header off `raw`: (lines, offset of the data). `end(line)` ends it."""
     if not raw.lstrip().startswith(first):
         head = raw[:16]
-        raise ModelFileError(path, "", f"a {what} file (starting with "
-                             f"{' or '.join(f.decode() for f in first)})",
+        names = [f.decode() for f in first]
+        starts = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " or " + names[-1]
+        raise ModelFileError(path, "", f"a {what} file (starting with {starts})",
                              "an empty file" if not raw else repr(head))
     lines, pos = [], 0
     while pos < len(raw):
@@ -281,6 +282,8 @@ def _read_ply(path: str, raw: bytes) -> tuple[NDArray, list[bytes]]:
 
 def _text_table(path: str, text: str, delimiter: str | None, first_line: int = 1) -> NDArray:
     """A table of numbers from text; a bad value is a ModelFileError naming its line."""
+    if not any(ln.split("#", 1)[0].strip() for ln in text.splitlines()):
+        return np.empty((0, 0))
     try:
         return np.loadtxt(StringIO(text), delimiter=delimiter, comments="#", ndmin=2,
                           dtype=float)
@@ -453,5 +456,5 @@ def write_pcd(path: str | Path, points: ArrayLike, units: Literal["m", "mm"] = "
         if binary:
             f.write(p.astype("<f4").tobytes())
         else:
-            np.savetxt(f, p, fmt="%.6g")
+            np.savetxt(f, p, fmt="%.9g")
     return path
