@@ -105,6 +105,9 @@ def test_csv_with_header_xyz_and_npy(tmp_path):
 def test_nan_and_inf_dropped_and_counted_or_refused(tmp_path):
     p = POINTS.copy()
     p[[3, 10, 11]] = [np.nan, 0, 0], [np.inf, 1, 1], [0, -np.inf, 0]
+    text = "# units: m\n" + "\n".join(f"{x} {y} {z}" for x, y, z in p[3:].tolist())
+    cloud = read_cloud(write(tmp_path, "n.xyz", text))           # 'nan' on the first line
+    assert cloud.dropped == 3 and len(cloud.points) == len(p) - 6
     np.save(tmp_path / "n.npy", p)
     cloud = read_cloud(tmp_path / "n.npy", "m")
     assert cloud.dropped == 3 and len(cloud.points) == len(p) - 3

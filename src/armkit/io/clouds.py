@@ -308,6 +308,14 @@ def _text_table(path: str, text: str, delimiter: str | None, first_line: int = 1
         raise ModelFileError(path, "", "a table of numbers", msg.splitlines()[0]) from None
 
 
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _read_text(path: str, raw: bytes) -> tuple[NDArray, list[bytes]]:
     if b"\0" in raw[:4096]:
         raise ModelFileError(path, "", "a text file of x y z rows", "binary data")
@@ -317,8 +325,15 @@ def _read_text(path: str, raw: bytes) -> tuple[NDArray, list[bytes]]:
         raise ModelFileError(path, "", "a UTF-8 text file",
                              f"byte {raw[err.start]:#04x} at offset {err.start}") from None
     lines = text.splitlines()
-    comments = [ln.encode() for ln in lines if ln.lstrip().startswith("#")]
-    data = [(i, ln) for i, ln in enumerate(lines) if ln.split("#", 1)[0].strip()]
+    # The comments and header sit above the first data line: only those lines are looked at.
+    comments, data = [], []
+    for i, ln in enumerate(lines):
+        if ln.lstrip().startswith("#"):
+            comments.append(ln.encode())
+        elif ln.split("#", 1)[0].strip():
+            data.append((i, ln))
+            if len(data) == 2:
+                break
     if not data:
         return np.empty((0, 3)), comments
     first_i, first = data[0]
@@ -326,7 +341,7 @@ def _read_text(path: str, raw: bytes) -> tuple[NDArray, list[bytes]]:
     cells = [c.strip().lower() for c in (first.split(delimiter) if delimiter else first.split())]
     columns = [0, 1, 2]
     skip = 0
-    if any(re.search(r"[a-df-z_]", c) for c in cells):      # a header row ('e' is 1e-3)
+    if not all(_is_number(c) for c in cells):                # a header row
         if any(c not in cells for c in "xyz"):
             raise ModelFileError(path, f"line {first_i + 1}", "a header naming columns x, y "
                                  "and z", first.strip()[:60])
