@@ -20,12 +20,17 @@ from armkit.workspace import Section, Workspace, workspace
 
 # Loaded on first use, so that `import armkit` does not pay for pymodbus (about 0.1 s).
 _DRIVES = ("load_register_map", "check_waypoints", "send_waypoints", "DriveClient", "SimDrive")
+# Likewise the point-cloud target (scipy.ndimage and the sparse graph tools).
+_PERCEPTION = ("detect_target", "TargetResult")
 
 
 def __getattr__(name: str):
     if name in _DRIVES:
         import armkit.drives
         return getattr(armkit.drives, name)
+    if name in _PERCEPTION:
+        import armkit.perception
+        return getattr(armkit.perception, name)
     raise AttributeError(f"module 'armkit' has no attribute {name!r}")
 
 
@@ -37,4 +42,4 @@ __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot",
            "singular_values", "manipulability", "min_singular_value", "condition_number",
            "ik", "ik_solutions", "IKResult", "IKSolutions", "Trajectory", "cubic", "quintic",
            "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", "workspace",
-           "Workspace", "Section", *_DRIVES]
+           "Workspace", "Section", *_DRIVES, *_PERCEPTION]
