@@ -143,6 +143,7 @@ def test_no_target_is_a_result_with_a_reason():
     ("scene", {"choose": "first"}, "choose: expected one of largest, nearest, highest"),
     ("scene", {"radius": -0.04}, "radius: expected a positive length"),
     ("scene", {"eps": 0.0}, "eps: expected a positive length"),
+    ("scene", {"units": "mm"}, "units: applies to a cloud file"),
     ("scene", {"T_base_sensor": np.ones((4, 4))}, "T_base_sensor: expected a rotation part"),
 ])
 def test_bad_input_is_refused(points, kwargs, message):

@@ -90,20 +90,27 @@ def fit_plane_lsq(points: ArrayLike, weights: ArrayLike | None = None
     """
     p = np.asarray(points, float)
     if weights is None:
-        # Matrix products rather than mean(axis=0): one BLAS pass each over an (N, 3) array.
+        w = None
+        # Matrix-vector products rather than mean(axis=0) or q.T @ q: one single-threaded BLAS
+        # pass each (OpenBLAS threads an (N, 3) matrix product, which waits on a busy machine).
         centroid = np.full(len(p), 1.0 / len(p)) @ p
-        cov = p.T @ p / len(p) - np.outer(centroid, centroid)
+        q = p - centroid
+        cov = np.stack([q.T @ np.ascontiguousarray(q[:, k]) for k in range(3)]) / len(p)
     else:
         w = np.asarray(weights, float)
         centroid = (w @ p) / w.sum()
         q = p - centroid
         cov = (q * w[:, None]).T @ q / w.sum()
-    values, vectors = np.linalg.eigh(cov)
+    _, vectors = np.linalg.eigh(cov)
     normal = vectors[:, 0]
     offset = -float(normal @ centroid)
     if offset < 0:
         normal, offset = -normal, -offset
-    return normal, offset, float(np.sqrt(max(values[0], 0.0)))
+    # The residuals themselves, not sqrt of the smallest eigenvalue (which carries an error of
+    # about sqrt(eps * largest) ~ 1e-8 m).
+    h = q @ normal
+    rms = np.sqrt(np.mean(h * h) if w is None else (w @ (h * h)) / w.sum())
+    return normal, offset, float(rms)
 
 
 def ransac_plane(points: ArrayLike, threshold: float = 0.01, *, probability: float = 0.999,
