@@ -181,14 +181,16 @@ def ransac_plane(points: ArrayLike, threshold: float = 0.01, *, probability: flo
     if best_normal is None:
         return Plane(np.array([0.0, 0.0, 1.0]), 0.0, np.zeros(n, bool), float("nan"), drawn)
     normal, offset = best_normal, best_offset
-    inliers = np.abs(p @ normal + offset) < threshold
+    h = p @ normal + offset
+    inliers = np.abs(h) < threshold
     for _ in range(refits):
         if inliers.sum() < 3:
             break
         normal, offset, _ = fit_plane_lsq(np.compress(inliers, p, axis=0))
-        inliers = np.abs(p @ normal + offset) < threshold
+        h = p @ normal + offset
+        inliers = np.abs(h) < threshold
     if offset < 0:
         normal, offset = -normal, -offset
-    h = (p @ normal + offset)[inliers]
+    h = h[inliers]
     rms = float(np.sqrt(np.mean(h * h))) if inliers.any() else float("nan")
     return Plane(normal, float(offset), inliers, rms, drawn)

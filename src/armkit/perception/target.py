@@ -373,6 +373,7 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
                       "(an object, not an opening)"), np.zeros(n, bool), np.zeros((0, 2))
 
     sectors = 90
+
     def innermost(points2: NDArray, outer: bool) -> tuple[NDArray, NDArray]:
         d = points2 - rough
         r = np.linalg.norm(d, axis=1)
@@ -395,8 +396,7 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
 
     # Rays through the hole: returns behind the wall, carried back along their ray to the wall;
     # where a sector has both, the edge is taken midway between the two.
-    h = p @ plane.normal + plane.offset
-    behind = h < -threshold
+    behind = h_all < -threshold
     # Where no ray went through, the edge lies on average half a spacing inside the innermost
     # wall point (between it and the next sample, which fell into the hole).
     spacing = cell / 2.5
@@ -413,7 +413,11 @@ def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None
             sec_b, pick_b = innermost(xy_b[inside], outer=True)
             through = np.full((sectors, 2), np.nan)
             through[sec_b] = xy_b[inside][pick_b]
+            # A return behind the wall whose ray crosses it beyond the innermost wall point
+            # went through solid wall: an outlier, left out.
             both = ~np.isnan(rim_wall[:, 0]) & ~np.isnan(through[:, 0])
+            both[both] = (np.linalg.norm(through[both] - rough, axis=1)
+                          < np.linalg.norm(rim_wall[both] - rough, axis=1))
             rim[both] = 0.5 * (rim_wall[both] + through[both])
     rim = rim[~np.isnan(rim[:, 0])]
     if len(rim) < 3:
