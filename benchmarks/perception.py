@@ -26,8 +26,8 @@ import time
 import numpy as np
 from sklearn.cluster import DBSCAN
 
-from armkit.perception import dbscan, detect_target, random_scene, ransac_plane
 import armkit.perception.target as target_module
+from armkit.perception import dbscan, detect_target, random_scene, ransac_plane
 
 N_POINTS, RADIUS = 100_000, 0.04
 

@@ -3,7 +3,6 @@ ascii/binary, CSV, XYZ, npy), units, NaN/inf, and every bad file with one precis
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 

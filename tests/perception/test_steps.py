@@ -5,13 +5,23 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 from sklearn.cluster import DBSCAN
 
 from armkit.errors import InputError
-from armkit.perception import (dbscan, euclidean_clusters, fit_circle, fit_plane_lsq,
-                               random_scene, ransac_plane, remove_statistical_outliers,
-                               statistical_outliers, synthetic_scene, voxel_downsample)
+from armkit.perception import (
+    dbscan,
+    euclidean_clusters,
+    fit_circle,
+    fit_plane_lsq,
+    random_scene,
+    ransac_plane,
+    remove_statistical_outliers,
+    statistical_outliers,
+    synthetic_scene,
+    voxel_downsample,
+)
 
 
 def blobs(seed: int, n_blobs: int = 5, per: int = 200, noise: int = 200) -> np.ndarray:

@@ -96,7 +96,7 @@ def test_base_frame_and_result_fields():
 
 def test_choose_rule():
     scene = random_scene(5, noise=0.001, n_points=N, outliers=0.0)
-    n, d = scene.plane_normal, scene.plane_offset
+    n = scene.plane_normal
     # A box of 60 x 60 mm standing 30 mm off the wall, 0.25 m from the inlet, denser than it.
     T = scene.T_sensor_target
     rng = np.random.default_rng(0)

@@ -6,11 +6,13 @@ with their ground truth come from `synthetic_scene` and `random_scene`.
 """
 
 from armkit.perception.clusters import dbscan, euclidean_clusters
-from armkit.perception.filters import (remove_statistical_outliers, statistical_outliers,
-                                       voxel_downsample)
+from armkit.perception.filters import (
+                                       remove_statistical_outliers,
+                                       statistical_outliers,
+                                       voxel_downsample,
+)
 from armkit.perception.plane import Plane, fit_plane_lsq, ransac_plane
-from armkit.perception.synthetic import (SyntheticScene, random_scene, synthetic_scene,
-                                         target_frame)
+from armkit.perception.synthetic import SyntheticScene, random_scene, synthetic_scene, target_frame
 from armkit.perception.target import Circle, TargetResult, detect_target, fit_circle
 
 __all__ = ["dbscan", "euclidean_clusters", "voxel_downsample", "statistical_outliers",

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import InputError
-from armkit.spatial import rotz, roty
+from armkit.spatial import roty, rotz
 
 
 @dataclass(frozen=True)
@@ -98,14 +98,14 @@ def _ray_directions(n_rays: int, half_az: float, half_el: float, rings: int | No
                     rng: np.random.Generator) -> NDArray:
     """Unit ray directions (M, 3) covering +-half_az in azimuth and +-half_el in elevation."""
     if rings:
-        n_az = max(int(round(n_rays / rings)), 2)
+        n_az = max(round(n_rays / rings), 2)
         el = np.linspace(-half_el, half_el, rings)
         az = np.linspace(-half_az, half_az, n_az)
         az = az + rng.uniform(0, az[1] - az[0])   # the scan's start varies from turn to turn
         A, E = np.meshgrid(az, el)
     else:
         n_side = max(int(round(np.sqrt(n_rays * half_az / half_el))), 2)
-        n_el = max(int(round(n_rays / n_side)), 2)
+        n_el = max(round(n_rays / n_side), 2)
         A, E = np.meshgrid(np.linspace(-half_az, half_az, n_side),
                            np.linspace(-half_el, half_el, n_el))
     A, E = A.ravel(), E.ravel()

@@ -39,7 +39,6 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
-from scipy.spatial import cKDTree
 
 from armkit.errors import InputError
 from armkit.perception.clusters import dbscan

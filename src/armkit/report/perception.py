@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.patches import Circle as CirclePatch, Rectangle
+from matplotlib.patches import Circle as CirclePatch
+from matplotlib.patches import Rectangle
 
 from armkit.perception.synthetic import target_frame
 from armkit.perception.target import TargetResult
