@@ -91,11 +91,13 @@ def fit_plane_lsq(points: ArrayLike, weights: ArrayLike | None = None
     p = np.asarray(points, float)
     if weights is None:
         w = None
-        # Matrix-vector products rather than mean(axis=0) or q.T @ q: one single-threaded BLAS
+        # Matrix-vector products rather than mean(axis=0) or p.T @ p: one single-threaded BLAS
         # pass each (OpenBLAS threads an (N, 3) matrix product, which waits on a busy machine).
+        # Raw moments lose about 2 log10(|centroid| / spread) digits: 2 of 16 for a wall 1.5 m
+        # away and 0.3 m across, harmless to the normal; the RMS comes from the residuals.
         centroid = np.full(len(p), 1.0 / len(p)) @ p
-        q = p - centroid
-        cov = np.stack([q.T @ np.ascontiguousarray(q[:, k]) for k in range(3)]) / len(p)
+        second = np.stack([p.T @ np.ascontiguousarray(p[:, k]) for k in range(3)]) / len(p)
+        cov = second - np.outer(centroid, centroid)
     else:
         w = np.asarray(weights, float)
         centroid = (w @ p) / w.sum()
@@ -108,7 +110,7 @@ def fit_plane_lsq(points: ArrayLike, weights: ArrayLike | None = None
         normal, offset = -normal, -offset
     # The residuals themselves, not sqrt of the smallest eigenvalue (which carries an error of
     # about sqrt(eps * largest) ~ 1e-8 m).
-    h = q @ normal
+    h = p @ normal + offset
     rms = np.sqrt(np.mean(h * h) if w is None else (w @ (h * h)) / w.sum())
     return normal, offset, float(rms)
 
