@@ -43,6 +43,18 @@ def rounds(f, repeat: int) -> np.ndarray:
     return np.array(out)
 
 
+def cpu_rounds(f, repeat: int) -> np.ndarray:
+    """CPU times (s) of this process over `repeat` calls: on a machine shared with other jobs,
+    close to what the wall time would be on a quiet one (the pipeline runs on one thread)."""
+    f()
+    out = []
+    for _ in range(repeat):
+        t = time.process_time()
+        f()
+        out.append(time.process_time() - t)
+    return np.array(out)
+
+
 def mmm(t: np.ndarray, scale: float = 1e3) -> str:
     return f"{t.min() * scale:.1f} / {np.median(t) * scale:.1f} / {t.max() * scale:.1f}"
 
@@ -78,6 +90,8 @@ def timing(repeat: int) -> None:
     theirs = rounds(lambda: with_sklearn(lambda: detect_target(p, radius=RADIUS)), repeat)
     plane = rounds(lambda: ransac_plane(p, 0.01, refits=1), repeat)
     print(f"  armkit detect_target (known radius)          {mmm(ours)}")
+    cpu = cpu_rounds(lambda: detect_target(p, radius=RADIUS), repeat)
+    print(f"    its CPU time (process_time)                {mmm(cpu)}")
     print(f"  same pipeline, scikit-learn DBSCAN           {mmm(theirs)}   "
           f"ratio {np.median(theirs) / np.median(ours):.2f}x")
     print(f"  of which the wall (RANSAC + 1 refit)         {mmm(plane)}")
