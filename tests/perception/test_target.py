@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armkit.errors import InputError
+from armkit.errors import InputError, ModelFileError
 from armkit.perception import detect_target, random_scene, synthetic_scene
 from armkit.spatial import pose_from_xyz_rpy
 
@@ -152,3 +152,23 @@ def test_bad_input_is_refused(points, kwargs, message):
         points = {"scene": p, "scene-mm": p * 1e-3, "scene-km": p * 1e3}[points]
     with pytest.raises(InputError, match=message):
         detect_target(points, **kwargs)
+
+
+def test_from_a_file_with_nan_points(tmp_path):
+    from armkit.io.clouds import write_pcd
+
+    scene = random_scene(4, noise=0.002, n_points=N)
+    points = scene.points.copy()
+    points[::1000] = np.nan                                   # rays with no return
+    path = write_pcd(tmp_path / "scan.pcd", points, "mm")
+    result = detect_target(path, radius=0.04)
+    assert result.success and result.dropped == len(points[::1000])
+    assert result.units == "mm" and result.source == str(path)
+    assert errors(result, scene)[0] < 1e-3
+    with pytest.raises(ModelFileError, match="expected finite coordinates"):
+        detect_target(str(path), radius=0.04, nonfinite="refuse")
+    with pytest.raises(ValueError):                           # results are read-only
+        result.T_sensor_target[0, 3] = 1.0
+    mine = scene.points.copy()
+    detect_target(mine, radius=0.04)
+    mine[0] = 0.0                                             # the caller's array stays theirs

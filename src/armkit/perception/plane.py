@@ -42,6 +42,10 @@ class Plane:
     rms: float
     iterations: int
 
+    def __post_init__(self):
+        self.normal.flags.writeable = False
+        self.inliers.flags.writeable = False
+
     def distance(self, points: ArrayLike) -> NDArray:
         """Signed distances (N,) of points (N, 3) to the plane, m; positive on the sensor's side."""
         return np.asarray(points, float) @ self.normal + self.offset

@@ -243,6 +243,14 @@ class TargetResult:
     source: str | None = None
     units: str = "m"
 
+    def __post_init__(self):
+        # Read-only views: the caller's own arrays (points given in) stay writeable.
+        for name, value in list(vars(self).items()):
+            if isinstance(value, np.ndarray):
+                view = value.view()
+                view.flags.writeable = False
+                object.__setattr__(self, name, view)
+
     @property
     def centre(self) -> NDArray:
         """The inlet's centre in the sensor frame (3,), m."""
