@@ -38,6 +38,7 @@ _HOMES = {
                      "select_poses", "accuracy_report", "AccuracyReport", "CameraMount",
                      "points_to_base", "poses_to_base"), "armkit.calibration"),
     "read_camera_mount": "armkit.io.camera",
+    **dict.fromkeys(("detect_target", "TargetResult"), "armkit.perception"),
 }
 
 if TYPE_CHECKING:       # what the names are, for readers and type checkers
@@ -47,6 +48,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.drives import (DriveClient, SimDrive, check_waypoints, load_register_map,
                                send_waypoints)
     from armkit.io.camera import read_camera_mount
+    from armkit.perception import TargetResult, detect_target
     from armkit.kinematics.forward import fk, fk_frames
     from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
     from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,

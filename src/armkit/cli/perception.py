@@ -1,0 +1,118 @@
+"""`armkit detect CLOUD`: the water inlet in a point cloud, in the sensor and base frames."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from armkit.cli.app import EXIT_FAILED, JsonFlag, app, output_folder, print_json, stdout
+from armkit.errors import InputError
+from armkit.spatial import matrix_to_rpy
+
+_CHOICES = {"units": ("m", "mm"), "--kind": ("pipe", "hole"),
+            "--nonfinite": ("drop", "refuse"), "--choose": ("largest", "nearest", "highest")}
+
+
+def _one_of(name: str, value: str) -> str:
+    allowed = _CHOICES[name]
+    if value not in allowed:
+        raise InputError(f"{name}: expected one of {', '.join(allowed)}, found {value!r}")
+    return value
+
+
+def _pose(T: np.ndarray, k: float) -> dict:
+    """A pose as the CLI prints it: position in the file's length unit, axis, rpy in deg."""
+    M = T.copy()
+    M[:3, 3] *= k
+    return {"position": M[:3, 3], "axis": T[:3, 2],
+            "rpy_deg": matrix_to_rpy(T[:3, :3], degrees=True), "matrix": M}
+
+
+@app.command()
+def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .csv, .xyz, "
+                                                       ".txt or .npy.")],
+           sensor_to_base: Annotated[Path | None, typer.Option(
+               "--sensor-to-base", help="YAML file with the sensor's pose in the robot's base "
+                                        "frame (xyz/rpy or a 4x4 matrix, with units).")] = None,
+           units: Annotated[str | None, typer.Option(
+               help="The cloud's length unit, m or mm (needed unless the file declares it).")]
+           = None,
+           kind: Annotated[str, typer.Option(help="pipe or hole.")] = "pipe",
+           radius: Annotated[float | None, typer.Option(
+               help="Known inlet radius, in the cloud's units (default: fitted).")] = None,
+           nonfinite: Annotated[str, typer.Option(
+               help="Points with NaN or inf: drop (and count) or refuse.")] = "drop",
+           choose: Annotated[str, typer.Option(
+               help="Rule for the target cluster: largest, nearest or highest.")] = "largest",
+           out: Annotated[Path | None, typer.Option(
+               help="Folder for the picture (cloud, wall, cluster, circle).")] = None,
+           as_json: JsonFlag = False) -> None:
+    """The inlet's centre and axis found in a scan of the train's side."""
+    from armkit.io.clouds import UNITS, read_cloud
+    from armkit.io.sensor_transform import read_sensor_to_base
+    from armkit.perception import detect_target
+
+    if units is not None:
+        _one_of("units", units)
+    _one_of("--kind", kind)
+    _one_of("--nonfinite", nonfinite)
+    _one_of("--choose", choose)
+    folder = output_folder(out) if out is not None else None
+    T_base_sensor = read_sensor_to_base(sensor_to_base) if sensor_to_base is not None else None
+    data = read_cloud(cloud, units, nonfinite=nonfinite)
+    k = 1.0 / UNITS[data.units]
+    if radius is not None and not (np.isfinite(radius) and radius > 0):
+        raise InputError(f"--radius: expected a positive radius in {data.units}, found {radius:g}")
+    result = detect_target(data, kind=kind, choose=choose,
+                           radius=None if radius is None else radius / k,
+                           T_base_sensor=T_base_sensor)
+    figure = None
+    if folder is not None:
+        from armkit.report.perception import save_detection_figure
+        figure = save_detection_figure(result, folder, f"{cloud.stem}_detection")
+    quality = {"points": len(result.points), "dropped": result.dropped,
+               "plane_inliers": result.plane_inliers, "plane_rms": result.plane_rms * k,
+               "candidates": result.candidates, "clusters": result.clusters,
+               "cluster_size": result.cluster_size, "fit_points": result.fit_points,
+               "fit_rms": result.fit_rms * k, "arc_deg": np.degrees(result.coverage)}
+    if as_json:
+        print_json({
+            "success": result.success, "reason": result.reason, "kind": result.kind,
+            "cloud": str(cloud), "units": data.units,
+            "sensor": _pose(result.T_sensor_target, k) if result.success else None,
+            "base": (_pose(result.T_base_target, k)
+                     if result.success and result.T_base_target is not None else None),
+            "radius": result.radius * k, "radius_known": result.radius_known,
+            "centroid_sensor": result.centroid * k, "quality": quality,
+            "figure": None if figure is None else str(figure)})
+    else:
+        u = data.units
+        stdout.print(f"[bold]{cloud}[/bold]: {len(result.points):,} points ({u})"
+                     + (f", {result.dropped:,} with NaN or inf dropped" if result.dropped else ""))
+        if result.success:
+            for frame, T in (("sensor", result.T_sensor_target), ("base", result.T_base_target)):
+                if T is None:
+                    continue
+                pose = _pose(T, k)
+                stdout.print(f"{result.kind} in the {frame} frame: centre ("
+                             + ", ".join(f"{x:.6g}" for x in pose["position"])
+                             + f") {u}, axis (" + ", ".join(f"{x:.6f}" for x in pose["axis"])
+                             + "), rpy (" + ", ".join(f"{x:.4g}" for x in pose["rpy_deg"])
+                             + ") deg")
+            stdout.print(f"radius {result.radius * k:.5g} {u}"
+                         + (" (known)" if result.radius_known else " (fitted)")
+                         + f"; fit RMS {quality['fit_rms']:.3g} {u} over "
+                         f"{result.fit_points} points, arc {quality['arc_deg']:.0f} deg")
+        else:
+            stdout.print(f"no target: {result.reason}")
+        stdout.print(f"wall: {result.plane_inliers:,} inliers, RMS {quality['plane_rms']:.3g} "
+                     f"{u}; {result.candidates:,} candidates off the wall, "
+                     f"{result.clusters} cluster(s), target cluster {result.cluster_size:,} "
+                     "points")
+        if figure is not None:
+            stdout.print(f"figure:  {figure}")
+    if not result.success:
+        raise typer.Exit(EXIT_FAILED)

@@ -1,0 +1,100 @@
+"""`armkit detect`: the example scan end to end in a subprocess, JSON in the file's units, the
+base frame, the picture, "no target" as exit 1, and every bad argument as one line and exit 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from armkit.cli import app
+from armkit.io.clouds import write_pcd
+from armkit.io.sensor_transform import read_sensor_to_base
+from armkit.perception import detect_target, synthetic_scene
+
+EXAMPLES = Path(__file__).parents[2] / "examples" / "perception"
+SCAN, POSE = str(EXAMPLES / "inlet_scan.pcd"), str(EXAMPLES / "sensor_to_base.yaml")
+runner = CliRunner()
+
+
+def armkit(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "armkit", *args], capture_output=True,
+                          text=True, timeout=120)
+
+
+def test_example_scan_json_in_millimetres_with_base_frame_and_picture(tmp_path):
+    done = armkit("detect", SCAN, "--sensor-to-base", POSE, "--radius", "40", "--json",
+                  "--out", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    doc = json.loads(done.stdout)
+    expected = detect_target(SCAN, radius=0.04, T_base_sensor=read_sensor_to_base(POSE))
+    assert doc["success"] and doc["units"] == "mm" and doc["radius"] == pytest.approx(40)
+    np.testing.assert_allclose(doc["sensor"]["position"], expected.centre * 1000, atol=1e-9)
+    np.testing.assert_allclose(doc["base"]["position"], expected.T_base_target[:3, 3] * 1000,
+                               atol=1e-9)
+    np.testing.assert_allclose(doc["base"]["axis"], expected.T_base_target[:3, 2], atol=1e-12)
+    # The example's truth (synthetic_scene, seed 18): the pipe's mouth at this point, in mm.
+    np.testing.assert_allclose(doc["sensor"]["position"], [1295.2366, -14.2972, -28.6395],
+                               atol=0.5)
+    assert doc["quality"]["cluster_size"] > 50 and doc["quality"]["fit_rms"] < 2
+    with open(doc["figure"], "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+
+
+def test_text_output_and_no_target_exit_1(tmp_path):
+    done = armkit("detect", SCAN)
+    assert done.returncode == 0 and "pipe in the sensor frame: centre (1295" in done.stdout
+    wall = synthetic_scene("hole", radius=0.001, depth=None, n_points=3000, seed=2)
+    path = write_pcd(tmp_path / "wall.pcd", wall.points, "m")
+    done = armkit("detect", str(path), "--json", "--out", str(tmp_path))
+    assert done.returncode == 1 and done.stderr == ""
+    doc = json.loads(done.stdout)
+    assert doc["success"] is False and "off the wall" in doc["reason"] and doc["sensor"] is None
+    assert (tmp_path / "wall_detection.png").exists()
+
+
+@pytest.mark.parametrize("args, message", [
+    (["missing.pcd"], "missing.pcd: expected a readable file"),
+    (["{bad}"], "bad.pcd: expected a PCD file (starting with #, VERSION or FIELDS), found "),
+    (["{npy}"], "a.npy: units: expected a length unit, m or mm, declared in the file or given"),
+    (["{npy}", "--units", "cm"], "units: expected one of m, mm, found 'cm'"),
+    (["{npy}", "--units", "mm"], "a.npy: points: expected a scene at least 5 cm across"),
+    ([SCAN, "--units", "m"], "inlet_scan.pcd: units: expected m as given by the caller, found "
+                             "the file declares mm"),
+    ([SCAN, "--kind", "slot"], "--kind: expected one of pipe, hole, found 'slot'"),
+    ([SCAN, "--choose", "first"], "--choose: expected one of largest, nearest, highest, found"),
+    ([SCAN, "--nonfinite", "keep"], "--nonfinite: expected one of drop, refuse, found 'keep'"),
+    ([SCAN, "--radius", "-4"], "--radius: expected a positive radius in mm, found -4"),
+    ([SCAN, "--sensor-to-base", "{tf}"], "tf.yaml: units: expected a value, found nothing"),
+    (["{nan}", "--units", "m", "--nonfinite", "refuse"], "n.npy: points: expected finite coordinates, found 1 "
+                                         "point(s) with NaN or inf, the first at index 0"),
+])
+def test_bad_input_one_line_exit_2(tmp_path, args, message):
+    (tmp_path / "bad.pcd").write_bytes(b"\x89PNG\r\n\x1a\n")
+    np.save(tmp_path / "a.npy", synthetic_scene(n_points=500).points)
+    nan = synthetic_scene(n_points=500).points
+    nan[0, 0] = np.nan
+    np.save(tmp_path / "n.npy", nan)
+    (tmp_path / "tf.yaml").write_text("xyz: [0, 0, 0]\nrpy: [0, 0, 0]\n")
+    files = {"{bad}": tmp_path / "bad.pcd", "{npy}": tmp_path / "a.npy",
+             "{tf}": tmp_path / "tf.yaml", "{nan}": tmp_path / "n.npy"}
+    files["missing.pcd"] = tmp_path / "missing.pcd"
+    args = [str(files[a]) if a in files else a for a in args]
+    result = runner.invoke(app, ["detect", *args])
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and result.stdout == ""
+
+
+def test_bad_input_in_a_subprocess(tmp_path):
+    (tmp_path / "bad.ply").write_text("not a cloud\n")
+    done = armkit("detect", str(tmp_path / "bad.ply"), "--units", "mm")
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.strip().count("\n") == 0
+    assert "bad.ply: expected a PLY file (starting with ply), found b'not a cloud" in done.stderr
+    assert "Traceback" not in done.stderr
