@@ -69,7 +69,7 @@ def broken(tmp_path, old: str, new: str):
     ("units: {length: mm, angle: deg}\n", "", "units", "expected a value, found nothing"),
     ("length: mm", "length: inch", "units.length", "'mm' or 'm', found 'inch'"),
     ("convention: dh", "convention: xyz", "convention", "one of dh, mdh, poe, urdf"),
-    ("a: 300", "a: three hundred", "joints[1].a", "a valid number"),
+    ("a: 300", "a: three hundred", "joints[1].a", "a number, found 'three hundred'"),
     ("limits: [-90, 90]}\n  - {name: b", "limits: [90, -90]}\n  - {name: b", "joints[0].limits",
      "lower < upper, found [90.0, -90.0]"),
     ("limits: [0, 200]", "velocity: 10", "joints[2]", "limits [lower, upper] for a prismatic"),
@@ -106,7 +106,7 @@ def test_duplicate_key_is_refused(tmp_path):
 
 
 def test_not_a_mapping(tmp_path):
-    with pytest.raises(ModelFileError, match="expected a mapping of fields .*found list"):
+    with pytest.raises(ModelFileError, match="expected a mapping of fields .*found a list"):
         load_robot(write(tmp_path, "- 1\n- 2\n"))
 
 
