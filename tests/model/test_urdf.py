@@ -52,13 +52,16 @@ def test_unknown_tip(tree):
 
 
 @pytest.mark.parametrize("old, new, words", [
-    ('type="prismatic"', 'type="floating"', "type: expected revolute or continuous or prismatic"),
+    ('type="prismatic"', 'type="spherical"',
+     "type: expected revolute or continuous or prismatic or fixed, found 'spherical'"),
+    ('type="prismatic"', 'type="floating"',
+     "type: expected revolute, continuous, prismatic or fixed on the chain to 'hand'"),
     ('<limit lower="0" upper="0.5"', '<limit upper="0.5"', "<limit>: expected lower and upper"),
     ('<limit lower="0" upper="0.5"', '<limit lower="0.6" upper="0.5"', "lower < upper"),
     ('xyz="0.1 0 0"', 'xyz="0.1 0"', "<origin> xyz: expected 3 finite numbers"),
     ('xyz="0.1 0 0"', 'xyz="0.1 0 nan"', "<origin> xyz: expected 3 finite numbers"),
-    ('velocity="0.2"', 'velocity="fast"', "<limit> velocity: expected a number, found 'fast'"),
-    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 zero"/>', "<axis> xyz: expected numbers"),
+    ('velocity="0.2"', 'velocity="fast"', "<limit> velocity: expected a finite number, found 'fast'"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 zero"/>', "<axis> xyz: expected 3 finite numbers"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="yaw"/>', "expected independent"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>', "<axis> xyz: expected a non-zero direction"),
     ("</robot>", "", "expected a readable URDF (XML) file"),
