@@ -237,3 +237,13 @@ def test_xacro_without_the_package_says_how_to_get_it(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "xacro", None)          # as if not installed
     refused(urdf(tmp_path, XACRO, "tree.xacro"), 'expected the xacro package to expand a .xacro '
             'file (pip install "armkit[xacro]"), found it is not installed')
+
+
+def test_yaml_wrapper_naming_a_missing_urdf(tmp_path):
+    wrapper = tmp_path / "arm.yaml"
+    wrapper.write_text("name: w\nunits: {length: m, angle: rad}\nconvention: urdf\n"
+                       "urdf: nowhere.urdf\n")
+    with pytest.raises(ModelFileError, match=r"arm.yaml: urdf: expected a URDF file \(its path "
+                                             r"relative to this file\), found 'nowhere.urdf', "
+                                             r"which is not a file"):
+        armkit.load_robot(wrapper)

@@ -139,10 +139,10 @@ def read_yaml(path: str | Path, max_bytes: int = MAX_BYTES) -> Any:
         mark = getattr(err, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark else ""
         problem = getattr(err, "problem", None) or str(err)
-        raise ModelFileError(str(path), where, "valid YAML", _cut(problem)) from None
+        raise ModelFileError(str(path), where, "valid YAML", _cut(problem, 120)) from None
     except (ValueError, OverflowError, TypeError, RecursionError) as err:
         # Raised by PyYAML's constructors for values it parses but cannot build.
-        raise ModelFileError(str(path), "", "valid YAML", _cut(str(err))) from None
+        raise ModelFileError(str(path), "", "valid YAML", _cut(str(err), 120)) from None
 
 
 def kind_of(value: Any) -> str:

@@ -166,7 +166,11 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
     _check_unique_names(spec, path)
     T_base, T_tool = _pose(spec.base, units), _pose(spec.tool, units)
     if isinstance(spec, URDFFile):
-        found = read_urdf(Path(path).parent / spec.urdf, spec.tip)
+        urdf = Path(path).parent / spec.urdf
+        if not urdf.is_file():
+            raise ModelFileError(path, "urdf", "a URDF file (its path relative to this file)",
+                                 f"{found_text(spec.urdf)}, which is not a file")
+        found = read_urdf(urdf, spec.tip)
         table = URDFTable(found.path, found.tip, found.joints, T_base, T_tool)
         chain = chain_from_urdf(table)
     elif isinstance(spec, ScrewFile):
