@@ -81,11 +81,11 @@ class Doc(StrictModel):
 
 
 @pytest.mark.parametrize("value, words", [
-    (True, "x: expected a number, found True"),
-    ("1.5", "x: expected a number, found '1.5'"),
+    (True, "x: expected a valid number, found True"),
+    ("1.5", "x: expected a valid number, found '1.5'"),
     (float("nan"), "x: expected a finite number, found nan"),
     (10**400, "x: expected a finite number, found an integer of about 400 digits"),
-    ([1], "x: expected a number, found [1]"),
+    ([1], "x: expected a valid number, found [1]"),
 ])
 def test_number_is_strict_and_finite(value, words):
     with pytest.raises(ValidationError) as err:

@@ -33,7 +33,7 @@ def test_mutated_files(kind):
 
 def test_the_judge_counts_what_breaks_the_rules():
     case = Case("yaml", "/f.yaml", "refuse", "bool for a number", field="joints[1].a")
-    good = {"outcome": "refused", "message": "/f.yaml: joints[1].a: expected a number, found True"}
+    good = {"outcome": "refused", "message": "/f.yaml: joints[1].a: expected a valid number, found True"}
     assert judge(case, good) is None
     assert "hang" in judge(case, None)
     assert "not an ArmkitError" in judge(case, {"outcome": "crashed", "message": "TypeError: x"})

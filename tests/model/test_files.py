@@ -69,7 +69,7 @@ def broken(tmp_path, old: str, new: str):
     ("units: {length: mm, angle: deg}\n", "", "units", "expected a value, found nothing"),
     ("length: mm", "length: inch", "units.length", "'mm' or 'm', found 'inch'"),
     ("convention: dh", "convention: xyz", "convention", "one of dh, mdh, poe, urdf"),
-    ("a: 300", "a: three hundred", "joints[1].a", "a number, found 'three hundred'"),
+    ("a: 300", "a: three hundred", "joints[1].a", "a valid number, found 'three hundred'"),
     ("limits: [-90, 90]}\n  - {name: b", "limits: [90, -90]}\n  - {name: b", "joints[0].limits",
      "lower < upper, found [90.0, -90.0]"),
     ("limits: [0, 200]", "velocity: 10", "joints[2]", "limits [lower, upper] for a prismatic"),
@@ -182,10 +182,10 @@ def test_an_empty_joint_list(tmp_path):
 
 
 @pytest.mark.parametrize("old, new, field, words", [
-    ("a: 300", "a: true", "joints[1].a", "expected a number, found True"),
-    ("alpha: 90", "alpha: '90'", "joints[0].alpha", "expected a number, found '90'"),
+    ("a: 300", "a: true", "joints[1].a", "expected a valid number, found True"),
+    ("alpha: 90", "alpha: '90'", "joints[0].alpha", "expected a valid number, found '90'"),
     ("limits: [0, 200]", "limits: [false, 200]", "joints[2].limits[0]",
-     "expected a number, found False"),
+     "expected a valid number, found False"),
     ("a: 300", "a: 1e308", "joints[1].a", "expected a length of at most 1000 m, found 1e+308 mm"),
     ("a: 300", "a: -2e6", "joints[1].a", "expected a length of at most 1000 m, found -2e+06 mm"),
     ("d: 100", "d: 1" + "0" * 400, "joints[0].d", "expected a finite number, found an integer "
@@ -237,7 +237,7 @@ def test_empty_and_scalar_files(tmp_path, text, words):
     ("{type: revolute, axis: [0, 0, 1], point: [0, 0, 1e7]}", "joints[0].point",
      "a length of at most 1000 m, found 1e+07 mm"),
     ("{type: revolute, axis: [0, 0, true], point: [0, 0, 0]}", "joints[0].axis[2]",
-     "expected a number, found True"),
+     "expected a valid number, found True"),
 ])
 def test_screw_file_ranges(tmp_path, joint, field, words):
     text = ("name: s\nunits: {length: mm, angle: deg}\nconvention: poe\n"

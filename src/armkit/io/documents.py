@@ -30,7 +30,7 @@ class StrictModel(BaseModel):
 def _strict_number(value: Any) -> float:
     """A finite int or float as a float; a bool, a string or anything else is refused."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"expected a number, found {found_text(value)}")
+        raise ValueError(f"expected a valid number, found {found_text(value)}")
     try:
         number = float(value)
     except OverflowError:                     # an int beyond the largest double
