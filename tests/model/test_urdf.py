@@ -229,7 +229,11 @@ def test_xacro_file_expands_to_the_same_chain(tmp_path, tree):
     np.testing.assert_allclose(armkit.fk(armkit.Robot("x", robot), q),
                                armkit.fk(armkit.Robot("u", plain), q), atol=1e-15)
     refused(urdf(tmp_path, XACRO.replace("${lift / 3}", "${reach}"), "bad.xacro"),
-            "expected a .xacro file that expands to URDF, found")
+            "expected a .xacro file that expands to URDF, found name 'reach' is not defined")
+    find = XACRO.replace('<xacro:property name="lift" value="0.3"/>', '<xacro:include '
+                         'filename="$(find franka_description)/robots/common.xacro"/>')
+    refused(urdf(tmp_path, find, "find.xacro"), "found $(find ...), which needs a ROS "
+            "installation (ament_index_python) to find packages")
 
 
 def test_xacro_without_the_package_says_how_to_get_it(tmp_path, monkeypatch):

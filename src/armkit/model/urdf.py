@@ -149,8 +149,12 @@ def _expand_xacro(path: str) -> bytes:
     try:
         document = xacro.process_file(path)
     except Exception as err:     # xacro raises its own, XML and lookup errors of many kinds
+        text = " ".join((str(err) or type(err).__name__).split())
+        if "ament" in text:      # $(find pkg) looks packages up in a ROS installation
+            text = ("$(find ...), which needs a ROS installation (ament_index_python) to find "
+                    "packages: write the path instead, or expand the file where ROS is")
         raise ModelFileError(path, "", "a .xacro file that expands to URDF",
-                             found_text(str(err) or type(err).__name__)[1:-1]) from None
+                             text if len(text) <= 200 else text[:197] + "...") from None
     return document.toxml(encoding="utf-8")
 
 
