@@ -81,7 +81,7 @@ class _UniqueKeyLoader(yaml.SafeLoader):
                     None, None, f"a key that is a {type(key).__name__}", key_node.start_mark)
             if key in seen:
                 raise yaml.constructor.ConstructorError(
-                    None, None, f"key {key!r} given twice", key_node.start_mark)
+                    None, None, f"key {found_text(key)} given twice", key_node.start_mark)
             seen.add(key)
         return super().construct_mapping(node, deep=deep)
 
@@ -146,7 +146,7 @@ def read_yaml(path: str | Path, max_bytes: int = MAX_BYTES) -> Any:
 
 
 def kind_of(value: Any) -> str:
-    """What a parsed document holds, in words: ``nothing (an empty file)``, ``a list``, ..."""
+    """What a parsed document holds, in words: ``nothing (an empty document)``, ``a list``..."""
     if value is None:
         return "nothing (an empty document)"
     name = type(value).__name__

@@ -78,7 +78,7 @@ class _JointField(StrictModel):
     @classmethod
     def _ordered(cls, v):
         if v is not None and (len(v) != 2 or not v[0] < v[1]):
-            raise ValueError(f"expected [lower, upper] with lower < upper, found {v}")
+            raise ValueError(f"expected [lower, upper] with lower < upper, found {found_text(v)}")
         return v
 
 

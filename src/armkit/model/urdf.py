@@ -150,9 +150,10 @@ def _expand_xacro(path: str) -> bytes:
         document = xacro.process_file(path)
     except Exception as err:     # xacro raises its own, XML and lookup errors of many kinds
         text = " ".join((str(err) or type(err).__name__).split())
-        if "ament" in text:      # $(find pkg) looks packages up in a ROS installation
-            text = ("$(find ...), which needs a ROS installation (ament_index_python) to find "
-                    "packages: write the path instead, or expand the file where ROS is")
+        if "ament" in text or "package not found" in text.lower():
+            # $(find pkg) looks packages up in a ROS installation (or where xacrodoc says).
+            text = ("a $(find ...) package it cannot find (xacro looks packages up in a ROS "
+                    "installation): write the path instead, or expand the file where ROS is")
         raise ModelFileError(path, "", "a .xacro file that expands to URDF",
                              text if len(text) <= 200 else text[:197] + "...") from None
     return document.toxml(encoding="utf-8")
