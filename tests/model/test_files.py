@@ -276,3 +276,8 @@ def test_a_file_too_large_to_be_a_robot(tmp_path):
     path = write(tmp_path, GOOD + "#" * 2**20 + "\n")
     with pytest.raises(ModelFileError, match="expected a file of at most 1048576 bytes"):
         load_robot(path)
+
+
+def test_a_tip_is_for_urdf_files_only(tmp_path):
+    with pytest.raises(InputError, match="tip: expected none for a robot file"):
+        load_robot(write(tmp_path, GOOD), tip="hand")

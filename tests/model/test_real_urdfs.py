@@ -96,6 +96,8 @@ def test_a_tree_without_a_named_tip_lists_its_leaves():
     with pytest.raises(ModelFileError, match=r"tip: expected the name of the tip link \(the tree "
                                              r"has several: left_torso_itb, .* \(29 in all\)\)"):
         armkit.load_robot(path)
+    arm = armkit.load_robot(path, tip="left_gripper")
+    assert arm.name == "baxter" and arm.n == 7 and arm.joint_names[0] == "left_s0"
 
 
 def test_robot_file_wrapping_a_real_urdf(tmp_path):

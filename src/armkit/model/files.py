@@ -293,18 +293,31 @@ def _screw_row(joint: ScrewJointField, i: int, units: Units) -> ScrewRow:
                     _limits(joint, joint.type, units), point, joint.name or f"q{i + 1}")
 
 
-def load_robot(path: str | Path) -> Robot:
-    """Load a robot from a YAML robot file or a URDF file (.urdf: SI units).
+def load_robot(path: str | Path, tip: str | None = None) -> Robot:
+    """Load a robot from a YAML robot file or a URDF file (.urdf or .xacro: SI units).
+
+    Parameters
+    ----------
+    path : str or Path
+    tip : str, optional
+        URDF only: the link the chain ends at, where the tree has several leaves (a robot
+        file names its own ``tip``).
 
     Raises
     ------
     ModelFileError
+        If the file is invalid.
+    InputError
+        If a tip is given for a robot file.
     """
     path = Path(path)
     if path.suffix.lower() in (".urdf", ".xacro"):
-        table = read_urdf(path)
+        table = read_urdf(path, tip)
         name = path.name.split(".")[0] or path.stem
         return Robot(name, chain_from_urdf(table), Units("m", "rad"), "", table)
+    if tip is not None:
+        raise InputError(f"tip: expected none for a robot file (it names its own tip), "
+                         f"found {found_text(tip)} for {path}")
     return parse_robot(read_yaml(path, MAX_ROBOT_FILE_BYTES), str(path))
 
 
