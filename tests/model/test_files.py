@@ -188,10 +188,10 @@ def test_an_empty_joint_list(tmp_path):
      "expected a valid number, found False"),
     ("a: 300", "a: 1e308", "joints[1].a", "expected a length of at most 1000 m, found 1e+308 mm"),
     ("a: 300", "a: -2e6", "joints[1].a", "expected a length of at most 1000 m, found -2e+06 mm"),
-    ("d: 100", "d: 1" + "0" * 400, "joints[0].d", "expected a finite number, found an integer "
-     "of about 400 digits"),
-    ("alpha: 90", "alpha: 1e9", "joints[0].alpha", "expected an angle of at most 1000 rad, "
-     "found 1e+09 deg"),
+    ("d: 100", "d: 1" + "0" * 400, "joints[0].d", ("expected a finite number, found an integer "
+     "of about 400 digits")),
+    ("alpha: 90", "alpha: 1e9", "joints[0].alpha", ("expected an angle of at most 1000 rad, "
+     "found 1e+09 deg")),
     ("limits: [-90, 90]}\n  - {name: b", "limits: [-1e300, 90]}\n  - {name: b",
      "joints[0].limits", "an angle of at most 1000 rad, found -1e+300 deg"),
     ("limits: [0, 200]", "limits: [0, 200], velocity: 1e300", "joints[2].velocity",
@@ -219,8 +219,8 @@ def test_strict_types_ranges_and_names(tmp_path, old, new, field, words):
 
 
 @pytest.mark.parametrize("text, words", [
-    ("", "expected a mapping of fields (name, units, convention, ...), found nothing (an empty "
-         "document)"),
+    ("", ("expected a mapping of fields (name, units, convention, ...), found nothing (an empty "
+         "document)")),
     ("# only a comment\n", "found nothing (an empty document)"),
     ("42\n", "found an int"),
 ])

@@ -106,27 +106,27 @@ def refused(path, words: str, tip: str | None = "hand") -> str:
 
 @pytest.mark.parametrize("old, new, words", [
     # a link with two parents (the file's 4 joints must not load as 3)
-    ("</robot>", '<joint name="extra" type="revolute"><parent link="base"/><child link="l2"/>'
-     '<limit lower="0" upper="1"/></joint></robot>',
+    ("</robot>", ('<joint name="extra" type="revolute"><parent link="base"/><child link="l2"/>'
+     '<limit lower="0" upper="1"/></joint></robot>'),
      "link 'l2': expected one parent joint (a tree), found two: joints 'slide' and 'extra'"),
-    ('<joint name="slide"', '<joint name="yaw"', "joint 'yaw': expected a name no other joint "
-     "has, found it declared twice"),
+    ('<joint name="slide"', '<joint name="yaw"', ("joint 'yaw': expected a name no other joint "
+     "has, found it declared twice")),
     ('<link name="camera"/>', '<link name="camera"/><link name="l1"/>',
      "link 'l1': expected a name no other link has, found it declared twice"),
     ('<joint name="yaw" type="continuous"><parent link="base"/>',
      '<joint name="yaw" type="continuous"><parent link="bsae"/>',
-     "joint 'yaw' <parent>: expected a link declared in the file, found link 'bsae', which no "
-     "<link> declares"),
-    ('<child link="hand"/>', '<child/>', "joint 'hand_mount' <child>: expected <child "
-     "link=\"...\">, found none"),
+     ("joint 'yaw' <parent>: expected a link declared in the file, found link 'bsae', which no "
+     "<link> declares")),
+    ('<child link="hand"/>', '<child/>', ("joint 'hand_mount' <child>: expected <child "
+     "link=\"...\">, found none")),
     ('<joint name="yaw"', '<joint', "<joint>: expected a name attribute, found none"),
     ('<link name="camera"/>', '<link/>', "<link>: expected a name attribute, found none"),
-    ('velocity="0.2"', 'velocity="nan"', "joint 'slide' <limit> velocity: expected a finite "
-     "number, found 'nan'"),
+    ('velocity="0.2"', 'velocity="nan"', ("joint 'slide' <limit> velocity: expected a finite "
+     "number, found 'nan'")),
     ('velocity="0.2"', 'velocity="0"', "<limit> velocity: expected a positive number, found '0'"),
     ('velocity="0.2"', 'velocity="-1"', "<limit> velocity: expected a positive number"),
-    ('velocity="0.2"', 'velocity="1e308"', "<limit> velocity: expected a finite number of at "
-     "most 1e+06 in size"),
+    ('velocity="0.2"', 'velocity="1e308"', ("<limit> velocity: expected a finite number of at "
+     "most 1e+06 in size")),
     ('<limit lower="0" upper="0.5"', '<limit lower="0" upper="\u0661"',
      "joint 'slide' <limit> upper: expected a finite number, found '\u0661'"),
     ('<limit lower="0" upper="0.5"', '<limit lower="0" upper="1_0"',

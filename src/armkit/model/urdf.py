@@ -148,7 +148,7 @@ def _expand_xacro(path: str) -> bytes:
                              "(pip install \"armkit[xacro]\")", "it is not installed") from None
     try:
         document = xacro.process_file(path)
-    except Exception as err:     # xacro raises its own, XML and lookup errors of many kinds
+    except Exception as err:  # noqa: BLE001 - xacro raises its own, XML and lookup errors
         text = " ".join((str(err) or type(err).__name__).split())
         if "ament" in text or "package not found" in text.lower():
             # $(find pkg) looks packages up in a ROS installation (or where xacrodoc says).
