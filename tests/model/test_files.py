@@ -69,7 +69,7 @@ def broken(tmp_path, old: str, new: str):
     ("units: {length: mm, angle: deg}\n", "", "units", "expected a value, found nothing"),
     ("length: mm", "length: inch", "units.length", "'mm' or 'm', found 'inch'"),
     ("convention: dh", "convention: xyz", "convention", "one of dh, mdh, poe, urdf"),
-    ("a: 300", "a: three hundred", "joints[1].a", "a valid number"),
+    ("a: 300", "a: three hundred", "joints[1].a", "a valid number, found 'three hundred'"),
     ("limits: [-90, 90]}\n  - {name: b", "limits: [90, -90]}\n  - {name: b", "joints[0].limits",
      "lower < upper, found [90.0, -90.0]"),
     ("limits: [0, 200]", "velocity: 10", "joints[2]", "limits [lower, upper] for a prismatic"),
@@ -106,7 +106,7 @@ def test_duplicate_key_is_refused(tmp_path):
 
 
 def test_not_a_mapping(tmp_path):
-    with pytest.raises(ModelFileError, match="expected a mapping of fields .*found list"):
+    with pytest.raises(ModelFileError, match="expected a mapping of fields .*found a list"):
         load_robot(write(tmp_path, "- 1\n- 2\n"))
 
 
@@ -179,3 +179,105 @@ def test_robot_tables_are_read_only(any_robot):
 def test_an_empty_joint_list(tmp_path):
     with pytest.raises(ModelFileError, match=r"joints: expected at least 1 item\(s\), found 0"):
         load_robot(write(tmp_path, GOOD.split("joints:")[0] + "joints: []\n"))
+
+
+@pytest.mark.parametrize("old, new, field, words", [
+    ("a: 300", "a: true", "joints[1].a", "expected a valid number, found True"),
+    ("alpha: 90", "alpha: '90'", "joints[0].alpha", "expected a valid number, found '90'"),
+    ("limits: [0, 200]", "limits: [false, 200]", "joints[2].limits[0]",
+     "expected a valid number, found False"),
+    ("a: 300", "a: 1e308", "joints[1].a", "expected a length of at most 1000 m, found 1e+308 mm"),
+    ("a: 300", "a: -2e6", "joints[1].a", "expected a length of at most 1000 m, found -2e+06 mm"),
+    ("d: 100", "d: 1" + "0" * 400, "joints[0].d", ("expected a finite number, found an integer "
+     "of about 400 digits")),
+    ("alpha: 90", "alpha: 1e9", "joints[0].alpha", ("expected an angle of at most 1000 rad, "
+     "found 1e+09 deg")),
+    ("limits: [-90, 90]}\n  - {name: b", "limits: [-1e300, 90]}\n  - {name: b",
+     "joints[0].limits", "an angle of at most 1000 rad, found -1e+300 deg"),
+    ("limits: [0, 200]", "limits: [0, 200], velocity: 1e300", "joints[2].velocity",
+     "expected a velocity limit of at most 1e+06 m/s, found 1e+300 mm/s"),
+    ("convention: dh", "convention: [dh]", "convention",
+     "expected one of dh, mdh, poe, urdf, found ['dh']"),
+    ("convention: dh", "convention: {dh: 1}", "convention", "found {'dh': 1}"),
+    ("name: b,", "name: a,", "joints[1].name",
+     "expected a name no other joint has, found 'a', the name of joints[0]"),
+    ("{name: c, ", "{name: q1, ", "joints[2].name", "found 'q1', the name of joints[0]"),
+    ("name: arm", "name: [arm]", "name", "a valid string"),
+])
+def test_strict_types_ranges_and_names(tmp_path, old, new, field, words):
+    if old == "{name: c, ":                     # q1 clashes with an unnamed first joint
+        text = GOOD.replace("{name: a, ", "{").replace(old, new)
+    else:
+        text = GOOD.replace(old, new)
+    assert text != GOOD
+    path = write(tmp_path, text)
+    with pytest.raises(ModelFileError) as err:
+        load_robot(path)
+    message = str(err.value)
+    assert message.startswith(f"{path}: {field}: "), message
+    assert words in message, message
+
+
+@pytest.mark.parametrize("text, words", [
+    ("", ("expected a mapping of fields (name, units, convention, ...), found nothing (an empty "
+         "document)")),
+    ("# only a comment\n", "found nothing (an empty document)"),
+    ("42\n", "found an int"),
+])
+def test_empty_and_scalar_files(tmp_path, text, words):
+    path = write(tmp_path, text)
+    with pytest.raises(ModelFileError) as err:
+        load_robot(path)
+    assert str(err.value) == f"{path}: {words}" or words in str(err.value), str(err.value)
+
+
+@pytest.mark.parametrize("joint, field, words", [
+    ("{type: revolute, axis: [0, 0, 1e308], point: [0, 0, 0]}", "joints[0].axis",
+     "a direction component of at most 1000"),
+    ("{type: revolute, axis: [0, 0, 1], point: [0, 0, 1e7]}", "joints[0].point",
+     "a length of at most 1000 m, found 1e+07 mm"),
+    ("{type: revolute, axis: [0, 0, true], point: [0, 0, 0]}", "joints[0].axis[2]",
+     "expected a valid number, found True"),
+])
+def test_screw_file_ranges(tmp_path, joint, field, words):
+    text = ("name: s\nunits: {length: mm, angle: deg}\nconvention: poe\n"
+            f"home: {{xyz: [1, 0, 0]}}\njoints:\n  - {joint}\n")
+    with pytest.raises(ModelFileError) as err:
+        load_robot(write(tmp_path, text))
+    assert f": {field}: expected" in str(err.value) and words in str(err.value), str(err.value)
+
+
+def test_huge_pose_values(tmp_path):
+    with pytest.raises(ModelFileError, match=r"home.xyz: expected a length of at most 1000 m, "
+                                             r"found 5e\+200 mm"):
+        load_robot(write(tmp_path, "name: s\nunits: {length: mm, angle: deg}\nconvention: poe\n"
+                                   "home: {xyz: [5e200, 0, 0]}\njoints:\n"
+                                   "  - {type: revolute, axis: [0, 0, 1], point: [0, 0, 0]}\n"))
+    with pytest.raises(ModelFileError, match=r"tool.rpy: expected an angle of at most 1000 rad"):
+        load_robot(write(tmp_path, GOOD + "tool: {rpy: [0, 0, 1e6]}\n"))
+
+
+def test_billion_laughs_is_refused_at_once(tmp_path):
+    lines = ['a0: &a0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    lines += [f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 9) + "]" for i in range(1, 10)]
+    path = write(tmp_path, GOOD + "\n".join(lines) + "\n")
+    with pytest.raises(ModelFileError, match=r"line 9: expected valid YAML, found an alias "
+                                             r"\(\*a0\); anchors and aliases are not supported"):
+        load_robot(path)
+
+
+def test_deep_nesting_is_refused(tmp_path):
+    path = write(tmp_path, GOOD.replace("a: 300", "a: " + "[" * 900 + "]" * 900))
+    with pytest.raises(ModelFileError, match="expected valid YAML, found nesting deeper than 64"):
+        load_robot(path)
+
+
+def test_a_file_too_large_to_be_a_robot(tmp_path):
+    path = write(tmp_path, GOOD + "#" * 2**20 + "\n")
+    with pytest.raises(ModelFileError, match="expected a file of at most 1048576 bytes"):
+        load_robot(path)
+
+
+def test_a_tip_is_for_urdf_files_only(tmp_path):
+    with pytest.raises(InputError, match="tip: expected none for a robot file"):
+        load_robot(write(tmp_path, GOOD), tip="hand")

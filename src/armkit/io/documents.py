@@ -8,12 +8,14 @@ the field path, what was expected and what was found.
 from __future__ import annotations
 
 import difflib
+import math
+import re
 from collections.abc import Hashable
 from pathlib import Path
-from typing import Any, get_args
+from typing import Annotated, Any, get_args
 
 import yaml
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError
 
 from armkit.errors import ModelFileError
 
@@ -25,9 +27,50 @@ class StrictModel(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
+def _strict_number(value: Any) -> float:
+    """A finite int or float as a float; a bool, a string or anything else is refused."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"expected a valid number, found {found_text(value)}")
+    try:
+        number = float(value)
+    except OverflowError:                     # an int beyond the largest double
+        number = math.inf
+    if not math.isfinite(number):
+        raise ValueError(f"expected a finite number, found {found_text(value)}")
+    return number
+
+
+Number = Annotated[float, BeforeValidator(_strict_number)]
+"""A file's number field: a finite int or float (``true`` or ``"1.5"`` is not a number)."""
+
+MAX_BYTES = 8 * 2**20
+"""The largest file read_text and read_yaml read by default (bytes)."""
+
+MAX_DEPTH = 64
+"""The deepest nesting of lists and mappings read_yaml accepts."""
+
 
 class _UniqueKeyLoader(yaml.SafeLoader):
-    """safe_load that refuses a key given twice in one mapping (PyYAML keeps the last)."""
+    """safe_load that refuses a key given twice in one mapping (PyYAML keeps the last), any
+    alias (so a few hundred bytes cannot expand to gigabytes: "billion laughs"), and nesting
+    deeper than MAX_DEPTH (so it cannot exhaust the stack)."""
+
+    depth = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            raise yaml.composer.ComposerError(
+                None, None, f"an alias (*{str(event.anchor)[:40]}); anchors and aliases are "
+                "not supported", event.start_mark)
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise yaml.composer.ComposerError(
+                None, None, f"nesting deeper than {MAX_DEPTH} levels", self.peek_event().start_mark)
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
 
     def construct_mapping(self, node, deep=False):
         seen = set()
@@ -38,32 +81,76 @@ class _UniqueKeyLoader(yaml.SafeLoader):
                     None, None, f"a key that is a {type(key).__name__}", key_node.start_mark)
             if key in seen:
                 raise yaml.constructor.ConstructorError(
-                    None, None, f"key {key!r} given twice", key_node.start_mark)
+                    None, None, f"key {found_text(key)} given twice", key_node.start_mark)
             seen.add(key)
         return super().construct_mapping(node, deep=deep)
 
 
-def read_text(path: str | Path) -> str:
-    """A UTF-8 text file's contents; a missing or undecodable file is a ModelFileError."""
+# YAML 1.1 (PyYAML) reads 1e-3 as a string, as it wants a dot in a float; YAML 1.2 and every
+# user reads it as a number, and so does armkit.
+_UniqueKeyLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$"),
+    list("-+.0123456789"))
+
+
+def read_bytes(path: str | Path, max_bytes: int = MAX_BYTES) -> bytes:
+    """A regular file's bytes, at most `max_bytes`; anything else is a ModelFileError.
+
+    A device or a pipe (``/dev/zero``, a FIFO) is refused before it is opened, and a file is
+    never read past its bound, so no file can make this hang or fill the memory.
+    """
+    path = Path(path)
     try:
-        return Path(path).read_text(encoding="utf-8")
+        if path.exists() and not path.is_file():
+            raise ModelFileError(str(path), "", "a regular file", "a directory, device or pipe")
+        with path.open("rb") as stream:
+            data = stream.read(max_bytes + 1)
     except OSError as err:
         raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
+    if len(data) > max_bytes:
+        raise ModelFileError(str(path), "", f"a file of at most {max_bytes} bytes",
+                             "a larger one")
+    return data
+
+
+def read_text(path: str | Path, max_bytes: int = MAX_BYTES) -> str:
+    """A UTF-8 text file's contents (at most `max_bytes`); a missing, oversized or undecodable
+    file is a ModelFileError."""
+    data = read_bytes(path, max_bytes)
+    try:
+        return data.decode("utf-8")
     except UnicodeDecodeError as err:
         raise ModelFileError(str(path), "", "a UTF-8 text file",
                              f"byte {err.object[err.start]:#04x} at offset {err.start}") from None
 
 
-def read_yaml(path: str | Path) -> Any:
-    """Parse a YAML file safely; any failure is a ModelFileError naming the line."""
-    text = read_text(path)
+def read_yaml(path: str | Path, max_bytes: int = MAX_BYTES) -> Any:
+    """Parse a YAML file safely; any failure is a ModelFileError naming the line.
+
+    Refused: a key given twice in one mapping, aliases (``*name``), nesting deeper than
+    MAX_DEPTH, files over `max_bytes`, and values PyYAML cannot build (an integer of more
+    than 4300 digits, a date such as 2001-13-45).
+    """
+    text = read_text(path, max_bytes)
     try:
         return yaml.load(text, Loader=_UniqueKeyLoader)
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark else ""
         problem = getattr(err, "problem", None) or str(err)
-        raise ModelFileError(str(path), where, "valid YAML", problem) from None
+        raise ModelFileError(str(path), where, "valid YAML", _cut(problem, 120)) from None
+    except (ValueError, OverflowError, TypeError, RecursionError) as err:
+        # Raised by PyYAML's constructors for values it parses but cannot build.
+        raise ModelFileError(str(path), "", "valid YAML", _cut(str(err), 120)) from None
+
+
+def kind_of(value: Any) -> str:
+    """What a parsed document holds, in words: ``nothing (an empty document)``, ``a list``..."""
+    if value is None:
+        return "nothing (an empty document)"
+    name = type(value).__name__
+    return f"a {name}" if name[0] not in "aeiou" else f"an {name}"
 
 
 def _field_path(loc: tuple) -> str:
@@ -73,10 +160,56 @@ def _field_path(loc: tuple) -> str:
     return out
 
 
+FOUND_CHARS = 60
+"""The longest rendering of a found value in an error message."""
+
+
+def _cut(text: str, limit: int = FOUND_CHARS) -> str:
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _bounded_repr(value: Any, budget: int, depth: int = 0) -> str:
+    """repr of `value` doing work in proportion to `budget` characters, not to its size.
+
+    Containers show their first items until the budget is spent; a long string or number is
+    cut before it is rendered (an int of a million digits is never converted in full).
+    """
+    if isinstance(value, str):
+        return repr(value[:budget + 1])
+    if isinstance(value, bool) or value is None or isinstance(value, float):
+        return repr(value)
+    if isinstance(value, int):
+        if value.bit_length() > 4 * budget:       # more digits than the budget could show
+            return f"an integer of about {int(value.bit_length() * 0.30103)} digits"
+        return repr(value)
+    if isinstance(value, (list, tuple, dict, set, frozenset)):
+        if depth >= 8 or budget <= 0:
+            return "[...]" if isinstance(value, list) else "{...}"
+        opening, closing = {list: "[]", tuple: "()", dict: "{}"}.get(type(value), "{}")
+        items = value.items() if isinstance(value, dict) else value
+        parts, used = [], 0
+        for i, item in enumerate(items):
+            if used > budget:
+                parts.append("...")
+                break
+            if isinstance(value, dict):
+                part = (_bounded_repr(item[0], budget - used, depth + 1) + ": "
+                        + _bounded_repr(item[1], budget - used, depth + 1))
+            else:
+                part = _bounded_repr(item, budget - used, depth + 1)
+            parts.append(part)
+            used += len(part) + 2
+        return opening + ", ".join(parts) + closing
+    return f"a {type(value).__name__}"
+
+
 def found_text(value: Any) -> str:
-    """A value as an error message shows it: its repr, cut at 60 characters."""
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    """A value as an error message shows it: its repr, cut at 60 characters.
+
+    The work is bounded before anything is rendered, so a huge or deeply nested value costs
+    no more than a small one.
+    """
+    return _cut(_bounded_repr(value, FOUND_CHARS))
 
 
 def validation_error(path: str, err: ValidationError, model: type[BaseModel]) -> ModelFileError:
@@ -88,6 +221,9 @@ def validation_error(path: str, err: ValidationError, model: type[BaseModel]) ->
     if kind == "too_short":
         return ModelFileError(path, _field_path(loc), f"at least {first['ctx']['min_length']} "
                               f"item(s)", f"{first['ctx']['actual_length']}")
+    if kind == "too_long":
+        return ModelFileError(path, _field_path(loc), f"at most {first['ctx']['max_length']} "
+                              f"item(s)", str(first["ctx"].get("actual_length") or "more"))
     if kind == "extra_forbidden":
         known = _fields_at(model, loc[:-1])
         hint = difflib.get_close_matches(str(loc[-1]), known, n=1)

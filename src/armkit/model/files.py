@@ -30,7 +30,8 @@ import yaml
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from armkit.errors import InputError, ModelFileError
-from armkit.io.documents import StrictModel, found_text, read_yaml, validation_error
+from armkit.io.documents import (Number, StrictModel, found_text, kind_of, read_yaml,
+                                 validation_error)
 from armkit.model.chain import Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
@@ -39,7 +40,23 @@ from armkit.model.robot import Robot, Units
 from armkit.model.urdf import URDFTable, chain_from_urdf, read_urdf
 from armkit.spatial import matrix_to_rpy, pose_from_xyz_rpy
 
-Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Vector3 = Annotated[list[Number], Field(min_length=3, max_length=3)]
+
+MAX_ROBOT_FILE_BYTES = 2**20
+"""The largest robot file read (bytes); the built-in ones are about 1 kB."""
+
+MAX_LENGTH = 1e3
+"""The largest length a robot file may hold (m): no arm is a kilometre long, and a value such
+as 1e308 would overflow the kinematics that follow."""
+
+MAX_ANGLE = 1e3
+"""The largest angle a robot file may hold (rad), about 160 turns."""
+
+MAX_RATE = 1e6
+"""The largest velocity or acceleration limit a robot file may hold (SI units)."""
+
+MAX_AXIS = 1e3
+"""The largest component of a screw axis direction (it is normalised)."""
 
 
 class PoseField(StrictModel):
@@ -54,24 +71,24 @@ class UnitsField(StrictModel):
 
 class _JointField(StrictModel):
     name: str | None = None
-    limits: list[float] | None = None
-    velocity: float | None = Field(None, gt=0)
-    acceleration: float | None = Field(None, gt=0)
+    limits: list[Number] | None = None
+    velocity: Annotated[Number, Field(gt=0)] | None = None
+    acceleration: Annotated[Number, Field(gt=0)] | None = None
 
     @field_validator("limits")
     @classmethod
     def _ordered(cls, v):
         if v is not None and (len(v) != 2 or not v[0] < v[1]):
-            raise ValueError(f"expected [lower, upper] with lower < upper, found {v}")
+            raise ValueError(f"expected [lower, upper] with lower < upper, found {found_text(v)}")
         return v
 
 
 class DHJointField(_JointField):
     type: Literal["revolute", "prismatic", "fixed"]
-    alpha: float
-    a: float
-    d: float
-    theta: float
+    alpha: Number
+    a: Number
+    d: Number
+    theta: Number
 
     @model_validator(mode="after")
     def _limits_match_type(self):
@@ -157,9 +174,9 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
     """
     if not isinstance(document, dict):
         raise ModelFileError(path, "", "a mapping of fields (name, units, convention, ...)",
-                             type(document).__name__)
+                             kind_of(document))
     convention = document.get("convention")
-    if convention not in FILE_MODELS:
+    if not isinstance(convention, str) or convention not in FILE_MODELS:
         raise ModelFileError(path, "convention", "one of dh, mdh, poe, urdf",
                              found_text(convention) if "convention" in document else "nothing")
     model = FILE_MODELS[convention]
@@ -168,9 +185,15 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
     except ValidationError as err:
         raise validation_error(path, err, model) from None
     units = Units(spec.units.length, spec.units.angle)
+    _check_magnitudes(spec, units, path)
+    _check_unique_names(spec, path)
     T_base, T_tool = _pose(spec.base, units), _pose(spec.tool, units)
     if isinstance(spec, URDFFile):
-        found = read_urdf(Path(path).parent / spec.urdf, spec.tip)
+        urdf = Path(path).parent / spec.urdf
+        if not urdf.is_file():
+            raise ModelFileError(path, "urdf", "a URDF file (its path relative to this file)",
+                                 f"{found_text(spec.urdf)}, which is not a file")
+        found = read_urdf(urdf, spec.tip)
         table = URDFTable(found.path, found.tip, found.joints, T_base, T_tool)
         chain = chain_from_urdf(table)
     elif isinstance(spec, ScrewFile):
@@ -207,6 +230,80 @@ def _collision(field: CollisionField | None, units: Units, n: int,
     return CollisionSpec(radius, shapes, tuple((int(i), int(j)) for i, j in field.skip))
 
 
+def _check_magnitudes(spec: _RobotField, units: Units, path: str) -> None:
+    """Refuse a value too large to be meant (a length over MAX_LENGTH, ...), naming its field.
+
+    Raises
+    ------
+    ModelFileError
+        ``joints[1].a: expected a length of at most 1000 m, found 1e+308 mm``.
+    """
+    def check(field: str, values, what: str, to_si, bound: float, unit: str, si_unit: str):
+        values = [values] if isinstance(values, float) else values
+        for value in values:
+            if not abs(float(to_si(value))) <= bound:
+                raise ModelFileError(path, field, f"{what} of at most {bound:g} {si_unit}",
+                                     f"{value:g} {unit}".rstrip())
+
+    def length(field, values):
+        check(field, values, "a length", units.length_to_si, MAX_LENGTH, units.length, "m")
+
+    def angle(field, values):
+        check(field, values, "an angle", units.angle_to_si, MAX_ANGLE, units.angle, "rad")
+
+    def pose(field, value: PoseField | None):
+        if value is not None:
+            length(f"{field}.xyz", value.xyz)
+            angle(f"{field}.rpy", value.rpy)
+
+    pose("base", spec.base)
+    pose("tool", spec.tool)
+    if isinstance(spec, ScrewFile):
+        pose("home", spec.home)
+    for i, joint in enumerate(getattr(spec, "joints", ())):
+        where = f"joints[{i}]"
+        if isinstance(joint, DHJointField):
+            angle(f"{where}.alpha", joint.alpha)
+            length(f"{where}.a", joint.a)
+            length(f"{where}.d", joint.d)
+            angle(f"{where}.theta", joint.theta)
+        else:
+            check(f"{where}.axis", joint.axis, "a direction component", float, MAX_AXIS, "", "")
+            if joint.point is not None:
+                length(f"{where}.point", joint.point)
+        if joint.limits is not None:
+            (angle if joint.type == "revolute" else length)(f"{where}.limits", joint.limits)
+        revolute = joint.type == "revolute"
+        to_si = units.angle_to_si if revolute else units.length_to_si
+        unit, si_unit = (units.angle, "rad") if revolute else (units.length, "m")
+        for key, per in (("velocity", "/s"), ("acceleration", "/s^2")):
+            value = getattr(joint, key)
+            if value is not None:
+                check(f"{where}.{key}", value, f"a {key} limit", to_si, MAX_RATE,
+                      unit + per, si_unit + per)
+
+
+def _check_unique_names(spec: _RobotField, path: str) -> None:
+    """Refuse two joints of one name (given, or the q1, q2, ... of unnamed moving joints)."""
+    seen: dict[str, int] = {}
+    moving = 0
+    for i, joint in enumerate(getattr(spec, "joints", ())):
+        if joint.type == "fixed":
+            if not joint.name:
+                continue
+            name = joint.name
+        else:
+            moving += 1
+            # The numbering the front-ends give unnamed joints (chain_from_dh, _screw_row).
+            name = joint.name or f"q{moving if isinstance(spec, DHFile) else i + 1}"
+        if name in seen:
+            raise ModelFileError(path, f"joints[{i}].name", "a name no other joint has",
+                                 f"{found_text(name)}, the name of joints[{seen[name]}]"
+                                 + ("" if joint.name else " (unnamed joints are numbered q1, "
+                                    "q2, ...)"))
+        seen[name] = i
+
+
 def _pose(pose: PoseField | None, units: Units) -> np.ndarray:
     if pose is None:
         return np.eye(4)
@@ -239,18 +336,32 @@ def _screw_row(joint: ScrewJointField, i: int, units: Units) -> ScrewRow:
                     _limits(joint, joint.type, units), point, joint.name or f"q{i + 1}")
 
 
-def load_robot(path: str | Path) -> Robot:
-    """Load a robot from a YAML robot file or a URDF file (.urdf: SI units).
+def load_robot(path: str | Path, tip: str | None = None) -> Robot:
+    """Load a robot from a YAML robot file or a URDF file (.urdf or .xacro: SI units).
+
+    Parameters
+    ----------
+    path : str or Path
+    tip : str, optional
+        URDF only: the link the chain ends at, where the tree has several leaves (a robot
+        file names its own ``tip``).
 
     Raises
     ------
     ModelFileError
+        If the file is invalid.
+    InputError
+        If a tip is given for a robot file.
     """
     path = Path(path)
-    if path.suffix.lower() == ".urdf":
-        table = read_urdf(path)
-        return Robot(path.stem, chain_from_urdf(table), Units("m", "rad"), "", table)
-    return parse_robot(read_yaml(path), str(path))
+    if path.suffix.lower() in (".urdf", ".xacro"):
+        table = read_urdf(path, tip)
+        name = path.name.split(".")[0] or path.stem
+        return Robot(name, chain_from_urdf(table), Units("m", "rad"), "", table)
+    if tip is not None:
+        raise InputError(f"tip: expected none for a robot file (it names its own tip), "
+                         f"found {found_text(tip)} for {path}")
+    return parse_robot(read_yaml(path, MAX_ROBOT_FILE_BYTES), str(path))
 
 
 # --- writing ---------------------------------------------------------------------------------

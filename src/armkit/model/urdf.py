@@ -3,11 +3,26 @@
 A URDF joint places its child link at ``origin(xyz, rpy) @ M(q)``, M the motion about or along
 ``axis``. The chain runs from the root link to a tip link (named, or the only leaf); fixed
 joints are folded into their neighbours, so link frame i is the child link of moving joint i.
-Supported joint types: revolute, continuous (no position limits), prismatic, fixed.
+Supported joint types on the chain: revolute, continuous (no position limits), prismatic,
+fixed.
+
+The structure of the whole file is checked: every link and joint named once, every joint
+between two declared links, each link with at most one parent joint, no loop, one root. The
+joints of the chain are checked in full: every number an ASCII decimal, finite and within a
+sane range, limits ordered, velocity limits positive. Joints off the chain play no part in the
+model and their numbers are not read, so a file whose gripper or legs use conventions of their
+own (``velocity="0"``, ``floating``, ``planar`` and ``<mimic>`` joints) still gives its arm. On
+the chain, floating, planar and mimic joints are refused: the chain's joints are independent
+(a mimic joint's value is ``multiplier * leader + offset``, which the chain cannot hold).
+Meshes (``package://`` or file paths in ``<visual>`` and ``<collision>``) play no part in the
+kinematics and are not read. A ``.xacro`` file is expanded by the ``xacro`` package
+(``pip install "armkit[xacro]"``); xacro evaluates the file's expressions, so expand only files
+you trust.
 """
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,10 +31,33 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import ModelFileError
+from armkit.io.documents import found_text, read_bytes
 from armkit.model.chain import Chain, Joint, Limits, freeze
 from armkit.spatial import pose_from_xyz_rpy
 
 SUPPORTED = ("revolute", "continuous", "prismatic", "fixed")
+ELSEWHERE_ONLY = ("floating", "planar")
+"""Joint types allowed off the chosen chain only."""
+
+MAX_URDF_BYTES = 32 * 2**20
+"""The largest URDF file read (bytes); a humanoid's is about 100 kB."""
+
+MAX_LENGTH = 1e3
+"""The largest origin offset or prismatic limit (m)."""
+
+MAX_ANGLE = 1e3
+"""The largest rpy angle or revolute limit (rad)."""
+
+MAX_RATE = 1e6
+"""The largest velocity limit (rad/s or m/s)."""
+
+MAX_AXIS = 1e3
+"""The largest axis component (the axis is normalised)."""
+
+# A URDF number: ASCII decimal digits only (Python's float() also takes "١٢", "1_0", "nan").
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_XML_SPACE = re.compile(r"[ \t\n\r]+")
+_SHOWN_NAMES = 12
 
 
 @dataclass(frozen=True)
@@ -50,100 +88,247 @@ class URDFTable:
         freeze(self, "T_base", "T_tool")
 
 
-def _floats(element: ET.Element | None, attribute: str, default: str, path: str,
-            where: str) -> NDArray:
-    text = default if element is None else element.get(attribute, default)
-    try:
-        values = np.array([float(v) for v in text.split()])
-    except ValueError:
-        raise ModelFileError(path, f"{where} {attribute}", "numbers", repr(text)) from None
-    if values.shape != (3,) or not np.isfinite(values).all():
-        raise ModelFileError(path, f"{where} {attribute}", "3 finite numbers", repr(text))
+def _names(names) -> str:
+    """A list of names for a message, at most _SHOWN_NAMES of them."""
+    names = list(names)
+    shown = ", ".join(found_text(n)[1:-1] for n in names[:_SHOWN_NAMES])
+    return shown + (f", ... ({len(names)} in all)" if len(names) > _SHOWN_NAMES else "")
+
+
+def _numbers(text: str, count: int, path: str, where: str, bound: float) -> NDArray:
+    """`count` ASCII decimal numbers from an attribute's text, each finite and |x| <= bound."""
+    tokens = [t for t in _XML_SPACE.split(text) if t]
+    expected = "a finite number" if count == 1 else f"{count} finite numbers"
+    if len(tokens) != count or not all(_NUMBER.fullmatch(t) for t in tokens):
+        raise ModelFileError(path, where, expected, found_text(text))
+    values = np.array([float(t) for t in tokens])
+    if not (np.abs(values) <= bound).all():
+        raise ModelFileError(path, where, f"{expected} of at most {bound:g} in size",
+                             found_text(text))
     values.setflags(write=False)
     return values
 
 
+def _attribute(element: ET.Element | None, attribute: str, default: str, count: int,
+               path: str, where: str, bound: float) -> NDArray:
+    text = default if element is None else element.get(attribute, default)
+    return _numbers(text, count, path, f"{where} {attribute}", bound)
+
+
 def _limits(element: ET.Element, kind: str, path: str, where: str) -> Limits | None:
-    if kind == "fixed":
+    if kind not in ("revolute", "continuous", "prismatic"):
         return None
     limit = element.find("limit")
-    text = limit.get("velocity", "inf") if limit is not None else "inf"
-    try:
-        velocity = float(text)
-    except ValueError:
-        raise ModelFileError(path, f"{where} <limit> velocity", "a number",
-                             repr(text)) from None
-    velocity = velocity if velocity > 0 else np.inf
+    velocity = np.inf
+    if limit is not None and limit.get("velocity") is not None:
+        velocity = float(_numbers(limit.get("velocity"), 1, path, f"{where} <limit> velocity",
+                                  MAX_RATE)[0])
+        if not velocity > 0:
+            raise ModelFileError(path, f"{where} <limit> velocity", "a positive number",
+                                 found_text(limit.get("velocity")))
     if kind == "continuous":
         return Limits(-np.inf, np.inf, velocity)
     if limit is None or limit.get("lower") is None or limit.get("upper") is None:
         raise ModelFileError(path, f"{where} <limit>", "lower and upper for a "
                              f"{kind} joint", "none")
-    try:
-        lower, upper = float(limit.get("lower")), float(limit.get("upper"))
-    except ValueError:
-        raise ModelFileError(path, f"{where} <limit>", "numbers for lower and upper",
-                             f"{limit.get('lower')!r} and {limit.get('upper')!r}") from None
+    bound = MAX_ANGLE if kind == "revolute" else MAX_LENGTH
+    lower = float(_numbers(limit.get("lower"), 1, path, f"{where} <limit> lower", bound)[0])
+    upper = float(_numbers(limit.get("upper"), 1, path, f"{where} <limit> upper", bound)[0])
     if not lower < upper:
         raise ModelFileError(path, f"{where} <limit>", "lower < upper", f"{lower} and {upper}")
     return Limits(lower, upper, velocity)
 
 
+def _expand_xacro(path: str) -> bytes:
+    """The URDF a .xacro file expands to, through the optional xacro package."""
+    try:
+        import xacro
+    except ImportError:
+        raise ModelFileError(path, "", "the xacro package to expand a .xacro file "
+                             "(pip install \"armkit[xacro]\")", "it is not installed") from None
+    try:
+        document = xacro.process_file(path)
+    except Exception as err:  # noqa: BLE001 - xacro raises its own, XML and lookup errors
+        text = " ".join((str(err) or type(err).__name__).split())
+        if "ament" in text or "package not found" in text.lower():
+            # $(find pkg) looks packages up in a ROS installation (or where xacrodoc says).
+            text = ("a $(find ...) package it cannot find (xacro looks packages up in a ROS "
+                    "installation): write the path instead, or expand the file where ROS is")
+        raise ModelFileError(path, "", "a .xacro file that expands to URDF",
+                             text if len(text) <= 200 else text[:197] + "...") from None
+    return document.toxml(encoding="utf-8")
+
+
+@dataclass
+class _Element:
+    """A joint of the file as its structure gives it, before the chain is chosen."""
+
+    element: ET.Element
+    name: str
+    kind: str
+    parent: str
+    child: str
+    mimic: str | None
+
+
+def _read_structure(element: ET.Element, links: set[str], path: str) -> _Element:
+    """A joint's name, type and links, checked; its numbers are read only if on the chain."""
+    name, kind = element.get("name"), element.get("type")
+    if not name:
+        raise ModelFileError(path, "<joint>", "a name attribute", "none")
+    where = f"joint {found_text(name)}"
+    if kind not in SUPPORTED + ELSEWHERE_ONLY:
+        raise ModelFileError(path, f"{where} type", " or ".join(SUPPORTED),
+                             found_text(kind) if kind is not None else "none")
+    ends = {}
+    for end in ("parent", "child"):
+        link_element = element.find(end)
+        link = None if link_element is None else link_element.get("link")
+        if link is None:
+            raise ModelFileError(path, f"{where} <{end}>", f"<{end} link=\"...\">", "none")
+        if link not in links:
+            raise ModelFileError(path, f"{where} <{end}>", "a link declared in the file",
+                                 f"link {found_text(link)}, which no <link> declares")
+        ends[end] = link
+    mimic = element.find("mimic")
+    return _Element(element, name, kind, ends["parent"], ends["child"],
+                    None if mimic is None else (mimic.get("joint") or "?"))
+
+
+def _read_joint(item: _Element, path: str) -> URDFJoint:
+    """A joint of the chain with its numbers, each checked."""
+    element, kind = item.element, item.kind
+    where = f"joint {found_text(item.name)}"
+    origin = element.find("origin")
+    axis = _attribute(element.find("axis"), "xyz", "1 0 0", 3, path, f"{where} <axis>",
+                      MAX_AXIS)
+    if kind != "fixed" and not np.linalg.norm(axis) > 1e-9:
+        raise ModelFileError(path, f"{where} <axis> xyz", "a non-zero direction",
+                             found_text(element.find("axis").get("xyz")))
+    return URDFJoint(item.name, kind, item.parent, item.child,
+                     _attribute(origin, "xyz", "0 0 0", 3, path, f"{where} <origin>",
+                                MAX_LENGTH),
+                     _attribute(origin, "rpy", "0 0 0", 3, path, f"{where} <origin>",
+                                MAX_ANGLE),
+                     axis, _limits(element, kind, path, where))
+
+
+def _parse(path: str) -> ET.Element:
+    if path.lower().endswith(".xacro"):
+        data = _expand_xacro(path)
+    else:
+        data = read_bytes(path, MAX_URDF_BYTES)
+    if b"<!ENTITY" in data:
+        # Entity expansion can blow a few bytes up to gigabytes; no URDF needs it.
+        raise ModelFileError(path, "", "a URDF (XML) file without entity declarations",
+                             "<!ENTITY ...>")
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as err:
+        raise ModelFileError(path, "", "a readable URDF (XML) file",
+                             found_text(str(err))[1:-1]) from None
+    if root.tag != "robot":
+        raise ModelFileError(path, "", "a <robot> root element", f"<{found_text(root.tag)[1:-1]}>")
+    return root
+
+
 def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
-    """Read the serial chain from the root link to `tip` out of a URDF file.
+    """Read the serial chain from the root link to `tip` out of a URDF (or .xacro) file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.urdf`` file, or a ``.xacro`` file (needs the xacro package).
+    tip : str, optional
+        The link the chain ends at; by default the tree's only leaf.
 
     Raises
     ------
     ModelFileError
-        The file is not URDF, a joint is malformed or of an unsupported type, the tree has
-        several roots, or several tips and none is named (the message lists them).
+        The file is not URDF; a joint or link is malformed, unnamed or named twice; a joint
+        names a link the file does not declare; a link has two parents; the joints form a
+        loop; the tree has several roots, or several tips and none is named (the message lists
+        them); the chain holds a mimic, floating or planar joint.
     """
     path = str(path)
-    try:
-        root = ET.parse(path).getroot()
-    except (OSError, ET.ParseError) as err:
-        raise ModelFileError(path, "", "a readable URDF (XML) file", str(err)) from None
-    if root.tag != "robot":
-        raise ModelFileError(path, "", "a <robot> root element", f"<{root.tag}>")
-    by_child: dict[str, URDFJoint] = {}
-    parents: set[str] = set()
+    root = _parse(path)
+    links: set[str] = set()
+    order: list[str] = []
+    for element in root.findall("link"):
+        name = element.get("name")
+        if not name:
+            raise ModelFileError(path, "<link>", "a name attribute", "none")
+        if name in links:
+            raise ModelFileError(path, f"link {found_text(name)}", "a name no other link has",
+                                 "it declared twice")
+        links.add(name)
+        order.append(name)
+    read: dict[str, _Element] = {}
+    parent_joint: dict[str, _Element] = {}                 # child link -> its joint
     for element in root.findall("joint"):
-        name, kind = element.get("name", "?"), element.get("type", "?")
-        where = f"joint {name!r}"
-        if kind not in SUPPORTED:
-            raise ModelFileError(path, f"{where} type", " or ".join(SUPPORTED), repr(kind))
-        if element.find("mimic") is not None:
-            raise ModelFileError(path, f"{where} <mimic>", "independent joints", "a mimic joint")
-        parent, child = element.find("parent"), element.find("child")
-        if parent is None or child is None:
-            raise ModelFileError(path, where, "<parent link=...> and <child link=...>", "none")
-        origin = element.find("origin")
-        joint = URDFJoint(name, kind, parent.get("link"), child.get("link"),
-                          _floats(origin, "xyz", "0 0 0", path, f"{where} <origin>"),
-                          _floats(origin, "rpy", "0 0 0", path, f"{where} <origin>"),
-                          _floats(element.find("axis"), "xyz", "1 0 0", path, f"{where} <axis>"),
-                          _limits(element, kind, path, where))
-        if kind != "fixed" and not np.linalg.norm(joint.axis) > 1e-9:
-            raise ModelFileError(path, f"{where} <axis> xyz", "a non-zero direction", "0 0 0")
-        by_child[joint.child] = joint
-        parents.add(joint.parent)
-    links = [link.get("name") for link in root.findall("link")]
-    roots = [link for link in links if link not in by_child]
+        joint = item = _read_structure(element, links, path)
+        if joint.name in read:
+            raise ModelFileError(path, f"joint {found_text(joint.name)}",
+                                 "a name no other joint has", "it declared twice")
+        read[joint.name] = item
+        if joint.child in parent_joint:
+            other = parent_joint[joint.child].name
+            raise ModelFileError(path, f"link {found_text(joint.child)}",
+                                 "one parent joint (a tree)", f"two: joints "
+                                 f"{found_text(other)} and {found_text(joint.name)}")
+        parent_joint[joint.child] = item
+    if not order:
+        raise ModelFileError(path, "<link>", "at least one link", "none")
+    _refuse_loops(parent_joint, path)
+    roots = [link for link in order if link not in parent_joint]
     if len(roots) != 1:
-        raise ModelFileError(path, "<link>", "one root link", f"{len(roots)}: {roots}")
-    tips = [link for link in links if link not in parents]
+        raise ModelFileError(path, "<link>", "one root link (a link no joint has as child)",
+                             f"{len(roots)}: {_names(roots)}")
+    parents = {item.parent for item in read.values()}
     if tip is None:
+        tips = [link for link in order if link not in parents]
         if len(tips) != 1:
             raise ModelFileError(path, "tip", "the name of the tip link (the tree has several: "
-                                 f"{', '.join(tips)})", "none")
+                                 f"{_names(tips)})", "none")
         tip = tips[0]
     elif tip not in links:
-        raise ModelFileError(path, "tip", f"a link of the file ({', '.join(links)})", repr(tip))
+        raise ModelFileError(path, "tip", f"a link of the file ({_names(order)})",
+                             found_text(tip))
     chain, link = [], tip
-    while link in by_child:
-        chain.append(by_child[link])
-        link = chain[-1].parent
+    while link in parent_joint:
+        item = parent_joint[link]
+        where = f"joint {found_text(item.name)}"
+        if item.mimic is not None:
+            raise ModelFileError(path, f"{where} <mimic>", "independent joints on the chain "
+                                 f"to {found_text(tip)} (a mimic joint off the chain is ignored)",
+                                 f"a mimic of joint {found_text(item.mimic)}")
+        if item.kind in ELSEWHERE_ONLY:
+            raise ModelFileError(path, f"{where} type", "revolute, continuous, prismatic or "
+                                 f"fixed on the chain to {found_text(tip)}",
+                                 found_text(item.kind))
+        chain.append(_read_joint(item, path))
+        link = item.parent
     return URDFTable(path, tip, tuple(reversed(chain)))
+
+
+def _refuse_loops(parent_joint: dict[str, _Element], path: str) -> None:
+    """Refuse joints that form a loop (following parents from a link leads back to it)."""
+    done: set[str] = set()                                  # links known to reach a root
+    for start in parent_joint:
+        walk: list[str] = []
+        on_walk: set[str] = set()
+        link = start
+        while link in parent_joint and link not in done:
+            if link in on_walk:
+                loop = walk[walk.index(link):] + [link]
+                joints = [parent_joint[x].name for x in loop[:-1]]
+                raise ModelFileError(path, "<joint>", "a tree of links (no loop)",
+                                     f"a loop through links {_names(reversed(loop))} "
+                                     f"(joints {_names(reversed(joints))})")
+            walk.append(link)
+            on_walk.add(link)
+            link = parent_joint[link].parent
+        done.update(walk)
 
 
 def chain_from_urdf(table: URDFTable) -> Chain:
