@@ -106,7 +106,7 @@ def usage_line(err) -> str:
         close = difflib.get_close_matches(unknown[1], names, n=1)
         return (f"COMMAND: expected one of {', '.join(names)}, found {unknown[1]!r}"
                 + (f"; did you mean {close[0]}?" if close else ""))
-    extra = re.match(r"Got unexpected extra arguments? \((.*)\)", err.message)
+    extra = re.match(r"Got unexpected extra argument\S* \((.*)\)", err.message)
     if extra:
         return f"{command}: expected no more arguments, found {extra[1]!r}"
     return f"{command}: {err.message}"

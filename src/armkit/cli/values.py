@@ -47,8 +47,8 @@ def check_number(name: str, value: Any, low: float = -COORDINATE, high: float = 
         ``--pose: expected a number from -1e+09 to 1e+09, found 1e+155``.
     """
     what = "a whole number" if integer else "a number"
-    span = (f"above {_bound(low)}" if low_open else f"from {_bound(low)}") + \
-        f" to {_bound(high)}{' ' + unit if unit else ''}"
+    span = (f"above {_bound(low)} and at most {_bound(high)}" if low_open else
+            f"from {_bound(low)} to {_bound(high)}") + (f" {unit}" if unit else "")
     try:
         x = float(str(value).replace("_", "")) if isinstance(value, str) else float(value)
     except (TypeError, ValueError, OverflowError):
