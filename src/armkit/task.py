@@ -106,5 +106,7 @@ def _figures(robot: Robot, trajectory: Trajectory, out: Path) -> tuple[Path, ...
     paths = (out / "demo_joint_motion.png", out / "demo_tool_motion.png")
     motion_figure(robot, trajectory).savefig(paths[0], dpi=90)
     samples = trajectory.sample_uniform(400)
-    tool_figure(robot, {"quintic": tool_motion(robot, samples)}).savefig(paths[1], dpi=90)
+    # The task is position + yaw: the tool's heading is drawn beside its position.
+    tool_figure(robot, {"quintic": tool_motion(robot, samples)}, yaw=True).savefig(paths[1],
+                                                                                  dpi=90)
     return paths
