@@ -23,6 +23,12 @@ from armkit.cli.values import label
 from armkit.errors import ArmkitError, DriveError, InputError
 
 EXIT_FAILED, EXIT_BAD_INPUT = 1, 2
+# What is built, as pyproject.toml's description says it: planning, calibration and task files
+# are not, and `armkit demo` says so too.
+DESCRIPTION = ("Serial robot arms: robot models (DH, modified DH, screws, URDF), forward and "
+               "inverse kinematics, Jacobians, Monte Carlo workspace, joint and Cartesian "
+               "trajectories, and joint waypoints to Modbus TCP drives. Not built yet: path "
+               "planning, calibration, task files.")
 
 stdout = Console(highlight=False, soft_wrap=True)
 stderr = Console(stderr=True, highlight=False, soft_wrap=True)
@@ -150,8 +156,7 @@ class _Group(TyperGroup):
 
 app = typer.Typer(cls=_Group, no_args_is_help=True, add_completion=False,
                   pretty_exceptions_enable=False, rich_markup_mode=None,
-                  help="Serial robot arms: models, kinematics, workspace, trajectories, "
-                       "planning, calibration and Modbus TCP drives.")
+                  help=DESCRIPTION)
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print one JSON document and nothing else.")]
 SiFlag = Annotated[bool, typer.Option("--si", help="Numbers in m and rad, not the file's units.")]
