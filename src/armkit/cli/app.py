@@ -73,8 +73,15 @@ def _check_unknown_options(command, ctx, args: list[str]) -> None:
             continue
         if arg.startswith("-") and len(arg) > 1 and not _is_number(arg) \
                 and arg[:2] not in takes:
-            raise InputError(_unknown_option(name, ctx.command_path, list(takes)))
+            raise InputError(_unknown_option(name, _command_name(ctx), list(takes)))
         i += 1
+
+
+def _command_name(ctx) -> str:
+    """``armkit`` or ``armkit fk``, however the program was started (``python -m armkit``)."""
+    if ctx is None or ctx.parent is None:
+        return "armkit"
+    return f"armkit {ctx.info_name}"
 
 
 def _unknown_option(name: str, command: str, known: list[str]) -> str:
@@ -87,7 +94,7 @@ def _unknown_option(name: str, command: str, known: list[str]) -> str:
 
 def usage_line(err) -> str:
     """A usage error (typer's copy of click's) as one line naming the option or argument."""
-    command = err.ctx.command_path if getattr(err, "ctx", None) is not None else "armkit"
+    command = _command_name(getattr(err, "ctx", None))
     kind, param = type(err).__name__, getattr(err, "param", None)
     if kind == "NoSuchOption":
         known = list(err.possibilities or ())
@@ -106,7 +113,7 @@ def usage_line(err) -> str:
         if wanted:
             return f"{err.option_name}: expected {wanted[1]} values, found fewer"
         return f"{err.option_name}: {err.message}"
-    unknown = re.match(r"No such command '(.*)'", err.message)
+    unknown = re.match(r"No such command '([^']*)'", err.message)
     if unknown and getattr(err, "ctx", None) is not None:
         names = err.ctx.command.list_commands(err.ctx)
         close = difflib.get_close_matches(unknown[1], names, n=1)
