@@ -235,7 +235,8 @@ def tool_figure(robot: Robot, motions: Mapping[str, ToolMotion], *,
             if row:
                 ax.plot(m.t, np.linalg.norm(data, axis=1), color="k", lw=1.2, ls="-.",
                         label="magnitude")
-            ax.set_ylabel(f"tool {labels[row]} ({unit}{SUFFIX[row]})")
+            if col == 0:
+                ax.set_ylabel(f"tool {labels[row]} ({unit}{SUFFIX[row]})")
             if len(motions) > 1 and row == 0:
                 ax.set_title(name)
             ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
@@ -245,7 +246,8 @@ def tool_figure(robot: Robot, motions: Mapping[str, ToolMotion], *,
             heading = np.unwrap(np.arctan2(m.pose[:, 1, 0], m.pose[:, 0, 0]))
             ax.plot(m.t, robot.units.angle_from_si(heading), color=COLOURS[4], lw=1.5,
                     label="yaw")
-            ax.set_ylabel(f"tool yaw ({angle})")
+            if col == 0:
+                ax.set_ylabel(f"tool yaw ({angle})")
             if col == len(motions) - 1:
                 ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
                           borderaxespad=0.0)
