@@ -360,6 +360,34 @@ def _task(plan: _Plan, first: int, stop: int) -> _Partial:
         numba.set_num_threads(threads)
 
 
+def _scheduler_address(address: str) -> str:
+    """`address` if it is a Dask address armkit can connect to, checked before any
+    connection: a Client made from a malformed address fails, and then, when it is collected,
+    hangs 20 s in its own close and prints a traceback."""
+    from distributed.comm import parse_address
+    from distributed.comm.addressing import parse_host_port
+    from distributed.comm.registry import backends
+
+    expected = "an address such as tcp://127.0.0.1:8786"
+    try:
+        scheme, location = parse_address(address.strip(), strict=True)
+    except (ValueError, TypeError):
+        raise InputError(f"scheduler: expected {expected}, found {address!r}") from None
+    if scheme not in backends:
+        raise InputError(f"scheduler: expected {expected} (schemes: "
+                         f"{', '.join(sorted(backends))}), found {address!r}")
+    if scheme != "inproc":
+        try:
+            host, port = parse_host_port(location)
+        except (ValueError, TypeError):
+            raise InputError(f"scheduler: expected {expected} (a host and a port), "
+                             f"found {address!r}") from None
+        if not host or not 0 < port < 65536:
+            raise InputError(f"scheduler: expected {expected} (a host and a port 1..65535), "
+                             f"found {address!r}")
+    return address.strip()
+
+
 def _client(scheduler: Any):
     """(client, whether we opened it) for a `distributed.Client` or a scheduler address."""
     try:
@@ -372,10 +400,11 @@ def _client(scheduler: Any):
     if not isinstance(scheduler, str):
         raise InputError("scheduler: expected an address such as tcp://127.0.0.1:8786 or a "
                          f"distributed.Client, found {type(scheduler).__name__}")
+    address = _scheduler_address(scheduler)
     try:
-        return Client(scheduler, timeout="10s", set_as_default=False), True
+        return Client(address, timeout="10s", set_as_default=False), True
     except (OSError, TimeoutError, ValueError) as err:
-        raise InputError(f"scheduler: expected a Dask scheduler at {scheduler}, "
+        raise InputError(f"scheduler: expected a Dask scheduler at {address}, "
                          f"found none ({err})") from None
 
 
@@ -399,7 +428,10 @@ def _run_dask(plan: _Plan, client, progress: Callable[[int, int], None] | None) 
         samples[future.key] = min(stop * plan.chunk, plan.samples) - first * plan.chunk
         return [future]
 
-    running = as_completed([f for _ in range(2 * threads) for f in submit_run()])
+    # A Client made for this call is not the default one (set_as_default=False, so that a
+    # user's own default stays theirs): as_completed must be given its loop.
+    running = as_completed([f for _ in range(2 * threads) for f in submit_run()],
+                           loop=client.loop)
     held, done = None, 0
     for future in running:
         if future.key in samples:

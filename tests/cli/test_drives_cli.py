@@ -111,6 +111,9 @@ def test_no_drive_listening_is_a_failed_send(csv_file):
     ("1,2,3\n", MAP, "line 1: expected 6 numbers (the joints of inspection_6dof), or 7"),
     (CSV, str(WATER), "expected a header naming each joint of water_supply"),
     (CSV, "missing.map.yaml", "missing.map.yaml: expected a readable file"),
+    (CSV.replace("1,10,20,30", "1,10,nan,30"), MAP,
+     "wp.csv: line 3: expected finite numbers, found 1, 10, nan, 30, 40, 50, 60 (nan is not)"),
+    (CSV.replace("2,20,30", "2,inf,30"), MAP, "wp.csv: line 4: expected finite numbers"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, content, map_path, words):
     path = tmp_path / "wp.csv"
@@ -146,3 +149,49 @@ def test_sim_drive_and_send_as_real_processes(csv_file):
     finally:
         server.terminate()
         server.wait(timeout=10)
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--timeout", "0"), "armkit: --timeout: expected a number from 0.001 to 3600 s, found 0"),
+    (("--timeout", "1e308"), "armkit: --timeout: expected a number from 0.001 to 3600 s, "
+                             "found 1e+308"),
+    (("--port", "70000"), "armkit: --port: expected a whole number from 1 to 65535, found "
+                          "70000"),
+    (("--retries", "-1"), "armkit: --retries: expected a whole number from 0 to 100, found -1"),
+])
+def test_send_options_are_checked_and_named(csv_file, args, words):
+    result = run("send", str(csv_file), "--map", MAP, *args)
+    assert result.exit_code == 2
+    assert result.stderr.strip() == words
+
+
+def test_nan_in_a_json_waypoint_file_names_the_field(tmp_path):
+    path = tmp_path / "wp.json"
+    path.write_text('{"q": [[0, 0, 0, 0, 0, 0], [1, 2, NaN, 4, 5, 6]]}')
+    result = run("send", str(path), "--map", MAP, "--dry-run")
+    assert result.exit_code == 2
+    assert f"{path}: q[1][2]: expected finite numbers, found nan" in result.stderr
+
+
+def test_send_and_sim_drive_share_one_default_port():
+    from typer.main import get_command
+
+    group = get_command(app)
+    defaults = {name: next(p.default for p in group.commands[name].params if p.name == "port")
+                for name in ("send", "sim-drive")}
+    assert defaults == {"send": 5020, "sim-drive": 5020}
+
+
+def test_sim_drive_on_a_busy_port_is_one_line():
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        done = subprocess.run([sys.executable, "-m", "armkit", "sim-drive", "--port", str(port)],
+                              capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.strip() == (f"armkit: --port: expected a port free to listen on at "
+                                   f"127.0.0.1, found {port} in use (or 127.0.0.1 is not an "
+                                   f"address of this machine)")

@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -105,3 +106,15 @@ def test_the_real_command_end_to_end():
     done = subprocess.run([sys.executable, "-m", "armkit", "fk", "nothing"], capture_output=True,
                           text=True, env=env, timeout=120)
     assert done.returncode == 2 and "Traceback" not in done.stderr
+
+
+def test_help_and_the_package_description_say_what_is_built():
+    import tomllib
+
+    from armkit.cli.app import DESCRIPTION
+
+    project = tomllib.loads((Path(__file__).resolve().parents[2] / "pyproject.toml").read_text())
+    assert project["project"]["description"] == DESCRIPTION
+    assert "Not built yet: path planning, calibration" in DESCRIPTION
+    text = " ".join(run("--help").stdout.split())
+    assert "Not built yet: path planning, calibration, task files." in text

@@ -6,7 +6,10 @@ import json
 import os
 import subprocess
 import sys
+import time
+from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -79,13 +82,19 @@ def test_on_a_dask_cluster_the_numbers_are_the_local_ones(tmp_path, dask_client)
 
 
 @pytest.mark.parametrize("args, words", [
-    (("-n", "0"), "armkit: n: expected at least 1, found 0"),
-    (("-n", "lots"), "armkit: N: expected a whole number such as 1000000 or 1e6, found 'lots'"),
-    (("-n", "2.5"), "armkit: N: expected a whole number"),
-    (("--resolution", "-5"), "armkit: --resolution: expected a positive voxel edge in mm, "
-                             "found -5"),
+    (("-n", "0"), "armkit: -n: expected a whole number from 1 to 1e+10 samples in this "
+                  "process (--scheduler for more), found 0"),
+    (("-n", "lots"), "armkit: -n: expected a whole number from 1 to 1e+10"),
+    (("-n", "2.5"), "armkit: -n: expected a whole number"),
+    (("-n", "1e20"), "armkit: -n: expected a whole number from 1 to 1e+10 samples in this "
+                     "process (--scheduler for more), found 1e+20"),
+    (("--resolution", "-5"), "armkit: --resolution: expected a number above 0 and at most "
+                             "1e+09, found -5"),
+    (("--resolution", "1e308"), "armkit: --resolution: expected a number above 0"),
+    (("--height", "1e308"), "armkit: --height: expected a number from -1e+09 to 1e+09"),
     (("--resolution", "0.001"), "armkit: resolution: expected at least 0.000202 m"),
-    (("--scheduler", "nowhere"), "armkit: scheduler: expected a Dask scheduler at nowhere"),
+    (("--scheduler", "nowhere"), "armkit: scheduler: expected an address such as "
+                                 "tcp://127.0.0.1:8786, found 'nowhere'"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, args, words):
     result = run("workspace", "inspection_6dof", "--out", str(tmp_path), *args)
@@ -102,3 +111,87 @@ def test_the_real_command(tmp_path):
                           text=True, env=env, timeout=120)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["robot"] == "modular_4dof"
+
+
+@pytest.fixture(scope="module")
+def scheduler_address(tmp_path_factory):
+    """A Dask scheduler and one worker started as a user starts them: `dask scheduler` and
+    `dask worker`, separate processes on loopback, an ephemeral port."""
+    folder = tmp_path_factory.mktemp("dask")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(Path(armkit.__file__).parents[1]), os.environ.get("PYTHONPATH", "")])}
+    dask = [sys.executable, "-m", "dask"]
+    scheduler_file = folder / "scheduler.json"
+    processes = [subprocess.Popen(
+        [*dask, "scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+         "--scheduler-file", str(scheduler_file)], cwd=folder, env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        deadline = time.monotonic() + 120
+        while not scheduler_file.exists():
+            assert time.monotonic() < deadline and processes[0].poll() is None
+            time.sleep(0.2)
+        processes.append(subprocess.Popen(
+            [*dask, "worker", "--scheduler-file", str(scheduler_file), "--nthreads", "1",
+             "--nworkers", "1", "--no-dashboard"], cwd=folder, env=env,
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        address = json.loads(scheduler_file.read_text())["address"]
+        from distributed import Client
+
+        with Client(address, timeout="60s", set_as_default=False) as client:
+            client.wait_for_workers(1, timeout=120)
+        yield address
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+        for process in processes:
+            try:
+                process.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                process.kill()
+
+
+def test_workspace_on_a_scheduler_by_address_from_the_command_line(tmp_path, scheduler_address):
+    args = [sys.executable, "-m", "armkit", "workspace", "inspection_6dof", "-n", "30000",
+            "--out", str(tmp_path), "--json"]
+    done = subprocess.run([*args, "--scheduler", scheduler_address], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    local = json.loads(run(*args[3:]).stdout)
+    remote = json.loads(done.stdout)
+    assert {k: v for k, v in remote.items() if k != "figures"} == {
+        k: v for k, v in local.items() if k != "figures"}
+
+
+def test_workspace_on_a_scheduler_by_address_from_python(scheduler_address):
+    robot = armkit.robot("modular_4dof")
+    remote = armkit.workspace(robot, 50_000, seed=3, scheduler=scheduler_address)
+    local = armkit.workspace(robot, 50_000, seed=3)
+    np.testing.assert_array_equal(remote.voxels, local.voxels)
+    assert remote.volume == local.volume and remote.reach == local.reach
+
+
+@pytest.mark.parametrize("address, words", [
+    ("127.0.0.1", "expected an address such as tcp://127.0.0.1:8786, found '127.0.0.1'"),
+    ("bogus://127.0.0.1:5", "(schemes: inproc, tcp"),
+    ("tcp://127.0.0.1:99999", "(a host and a port 1..65535), found 'tcp://127.0.0.1:99999'"),
+    ("", "found ''"),
+])
+def test_a_bad_scheduler_address_is_one_line_and_nothing_after(tmp_path, address, words):
+    done = subprocess.run([sys.executable, "-m", "armkit", "workspace", "ur5", "-n", "1000",
+                           "--out", str(tmp_path), "--scheduler", address],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [done.stderr.strip()], done.stderr
+    assert words in done.stderr and "Traceback" not in done.stderr
+
+
+def test_without_a_terminal_a_long_run_says_how_long_before_it_goes_on(tmp_path, monkeypatch):
+    monkeypatch.setattr(command, "PROGRESS_FROM", 1)
+    monkeypatch.setattr(command, "ESTIMATE_FROM", 0.0)
+    result = run("workspace", "ur5", "-n", "600000", "--out", str(tmp_path), "--json")
+    assert result.exit_code == 0, result.stderr
+    lines = result.stderr.splitlines()
+    assert lines[0].startswith("sampling 600,000 joint vectors: about ") and " left" in lines[0]
+    assert any(line.startswith("sampled ") for line in lines[1:])
+    assert json.loads(result.stdout)["samples"] == 600_000

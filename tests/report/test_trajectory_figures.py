@@ -45,8 +45,52 @@ def test_motion_and_tool_figures(tmp_path):
     tr = quintic(np.zeros(6), robot.q_to_si([0, 30, -20, 400, 10, 0]), 4.0)
     fig = motion_figure(robot, tr, [1, 3])
     assert len(fig.axes) == 8
-    units = [t.get_text() for t in fig.axes[4].texts]        # joint 4, the telescope
-    assert units == ["mm"]
+    # Units are axis labels, not text over the curves.
+    assert fig.axes[4].get_ylabel() == "joint 4 (telescope)\n(mm)"      # the telescope
+    assert [ax.get_ylabel() for ax in fig.axes[5:]] == ["mm/s", "mm/s²", "mm/s³"]
+    assert all(not ax.texts for ax in fig.axes)
+
+
+def _dashed_levels(ax) -> list[float]:
+    return sorted(float(line.get_ydata()[0]) for line in ax.get_lines()
+                  if line.get_linestyle() == "--")
+
+
+def test_the_demo_joint_figure_draws_the_velocity_limit_the_lift_reaches():
+    from armkit.task import run_demo
+
+    report = run_demo()
+    robot = report.robot
+    fig = motion_figure(robot, report.trajectory)
+    axes = np.array(fig.axes).reshape(robot.n, 4)
+    # The quintic is as short as the lift's 200 mm/s allows: its peak touches the limit.
+    assert _dashed_levels(axes[0, 1]) == [pytest.approx(200.0)]
+    assert "limit" in [t.get_text() for t in axes[0, 1].get_legend().get_texts()]
+    # The swing that moves 4 deg is far from its limits: no line squashes its curve.
+    assert _dashed_levels(axes[1, 1]) == []
+
+
+def test_the_tool_figure_has_a_legend_and_draws_the_yaw_of_a_yaw_task():
+    from armkit.task import run_demo
+
+    report = run_demo()
+    motion = tool_motion(report.robot, report.trajectory.sample_uniform(200))
+    fig = tool_figure(report.robot, {"quintic": motion}, yaw=True)
+    assert len(fig.axes) == 4
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["x", "y", "z"]
+    assert fig.axes[3].get_ylabel() == "tool yaw (deg)"
+    yaw = fig.axes[3].lines[0].get_ydata()
+    assert yaw[-1] == pytest.approx(30.0, abs=1e-6)        # the inlet's heading, deg
+    assert "quintic" in fig._suptitle.get_text()
+
+
+def test_patterns_figure_draws_limits_it_comes_near_and_says_so_in_the_legend():
+    robot, trs = table1()
+    fig = patterns_figure(robot, trs, [1, 2, 4], amax=robot.q_to_si(np.full(6, 60.0)))
+    axes = np.array(fig.axes).reshape(3, 3)
+    assert _dashed_levels(axes[2, 0]) == [pytest.approx(-60.0)]     # 3-3-3 steps to -55
+    labels = [t.get_text() for t in axes[0, -1].get_legend().get_texts()]
+    assert labels[-1].startswith("limit") and "joint 2 (pitch1)" in labels
 
 
 def test_bad_joint_selection():

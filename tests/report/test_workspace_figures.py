@@ -38,3 +38,18 @@ def test_sections_titled_with_their_areas(ws):
     assert "azimuth 0 rad" in upright.get_title()
     image = level.get_images()[0]
     np.testing.assert_array_equal(image.get_array(), ws.horizontal_section(z).occupied)
+
+
+def test_projections_draw_the_reach_and_name_each_mark(ws):
+    fig = workspace_figure(ws)
+    _, *projections = fig.axes
+    radii = [a.patches[0].get_radius() for a in projections]
+    assert radii == pytest.approx([ws.radial_reach * 1000, ws.reach * 1000, ws.reach * 1000])
+    # Every sample lies inside its reach circle: the bound is drawn where it holds.
+    assert np.hypot(*(ws.cloud[:, :2].T * 1000)).max() <= radii[0] * (1 + 1e-12)
+    labels = [[t.get_text() for t in a.get_legend().get_texts()] for a in projections]
+    assert labels[0] == ["tool positions", "base origin", "reach from the z axis"]
+    assert labels[1] == labels[2] == ["tool positions", "base origin", "reach"]
+    level, upright = section_figure(ws).axes
+    assert [t.get_text() for t in level.get_legend().get_texts()] == [
+        "base origin", "occupied 50 mm cell"]

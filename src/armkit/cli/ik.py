@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from typing import Annotated, Optional
 
 import numpy as np
@@ -12,38 +11,37 @@ from rich.table import Table
 import armkit
 from armkit.cli.app import EXIT_FAILED, JsonFlag, SiFlag, app, print_json, stdout
 from armkit.cli.robots import RobotArg
+from armkit.cli.values import load_robot, number, parse_numbers
 from armkit.errors import InputError
 from armkit.kinematics.ik import CRITERIA, METHODS, NAMED_MASKS, ik, ik_solutions
 from armkit.model import SI
 from armkit.spatial import pose_from_xyz_rpy
 
 Triple = tuple[float, float, float]
-
-
-def parse_numbers(text: str, name: str, count: int) -> list[float]:
-    """Numbers separated by spaces or commas, exactly `count` of them."""
-    try:
-        values = [float(v) for v in re.split(r"[\s,]+", text.strip()) if v]
-    except ValueError:
-        raise InputError(f"{name}: expected {count} numbers, found {text!r}") from None
-    if len(values) != count:
-        raise InputError(f"{name}: expected {count} numbers, found {len(values)}")
-    return values
+# Angles typed at the command line, deg or rad: a million turns is past any meaning.
+ANGLE = 4e8
 
 
 @app.command(name="ik")
 def ik_command(
     robot: RobotArg,
-    pose: Annotated[Triple, typer.Option("--pose", help="Target position X Y Z, file units.")],
+    pose: Annotated[Triple, typer.Option(
+        "--pose", metavar="X Y Z", parser=number(),
+        help="Target position: three numbers separated by spaces, file units.")],
     rpy: Annotated[Optional[Triple], typer.Option(
-        "--rpy", help="Target roll pitch yaw, file units: a full orientation.")] = None,
+        "--rpy", metavar="R P Y", parser=number(-ANGLE, ANGLE),
+        help="Target roll pitch yaw (three numbers separated by spaces), file units: a full "
+             "orientation.")] = None,
     yaw: Annotated[Optional[float], typer.Option(
-        "--yaw", help="Target yaw only (position + yaw task).")] = None,
+        "--yaw", parser=number(-ANGLE, ANGLE),
+        help="Target yaw only (position + yaw task), file units.")] = None,
     pitch: Annotated[Optional[float], typer.Option(
-        "--pitch", help="Tool pitch in the vertical plane through the target "
-                        "(yaw-and-pitch arms).")] = None,
+        "--pitch", parser=number(-ANGLE, ANGLE),
+        help="Tool pitch in the vertical plane through the target (yaw-and-pitch arms), file "
+             "units.")] = None,
     q0: Annotated[Optional[str], typer.Option(
-        "--q0", help="Current configuration, file units, e.g. '0 -90 90 0 0 0'.")] = None,
+        "--q0", help="Current configuration, file units, spaces or commas between the values, "
+                     "e.g. '0 -90 90 0 0 0'.")] = None,
     all_solutions: Annotated[bool, typer.Option(
         "--all", help="List every closed-form solution.")] = False,
     mask: Annotated[Optional[str], typer.Option(
@@ -53,7 +51,7 @@ def ik_command(
         help=f"Choice among solutions: {', '.join(CRITERIA)}.")] = "nearest",
     as_json: JsonFlag = False, si: SiFlag = False) -> None:
     """Joint values that reach a target pose; exit 1 with the reason if none does."""
-    model = armkit.robot(robot)
+    model = load_robot(robot)
     u = model.units
     given = [name for name, v in (("--rpy", rpy), ("--yaw", yaw), ("--pitch", pitch)) if v is not None]
     if len(given) > 1:
@@ -65,7 +63,7 @@ def ik_command(
     T = pose_from_xyz_rpy(u.length_to_si(pose), u.angle_to_si(angles))
     if mask is None and rpy is None and pitch is None:
         mask = "position+yaw" if yaw is not None else "position"
-    start = None if q0 is None else model.q_to_si(parse_numbers(q0, "--q0", model.n))
+    start = None if q0 is None else model.q_to_si(parse_numbers("--q0", q0, model.n))
     result = ik(model, T, start, mask=mask, method=method, criterion=criterion)
     solutions = ik_solutions(model, T, mask=mask) if all_solutions else None
     out = SI if si else model.units

@@ -11,13 +11,15 @@ from rich.table import Table
 
 import armkit
 from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
+from armkit.cli.values import load_robot, number
 from armkit.errors import InputError
 from armkit.model import SI, Robot, Units, robot_document
 from armkit.model.urdf import URDFTable
 from armkit.spatial import matrix_to_rpy
 
 RobotArg = Annotated[str, typer.Argument(help="Built-in name (see `armkit robots`), or a "
-                                              "robot file (.yaml) or URDF file.")]
+                                              "robot file (.yaml) or URDF file.",
+                                         metavar="ROBOT")]
 
 
 def _fmt(x: float) -> str:
@@ -70,7 +72,7 @@ def _joint_rows(robot: Robot, units: Units) -> list[dict]:
 @app.command()
 def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None:
     """The robot's table, limits, base and tool, and its link frames at q = 0."""
-    model = armkit.robot(robot)
+    model = load_robot(robot)
     units = SI if si else model.units
     frames = armkit.fk_frames(model, np.zeros(model.n))
     names = ["base"] + list(model.joint_names[:-1]) + ["tool"]
@@ -110,11 +112,12 @@ def _cell(value) -> str:
 
 @app.command(context_settings=NUMBERS)
 def fk(robot: RobotArg,
-       q: Annotated[list[float], typer.Argument(help="Joint values in the robot file's units "
-                                                     "(deg/mm for the papers' robots).")],
+       q: Annotated[list[float], typer.Argument(
+           help="Joint values in the robot file's units (deg/mm for the papers' robots).",
+           metavar="Q...", parser=number())],
        as_json: JsonFlag = False, si: SiFlag = False) -> None:
     """The tool pose for one configuration."""
-    model = armkit.robot(robot)
+    model = load_robot(robot)
     if len(q) != model.n:
         raise InputError(f"Q: expected {model.n} joint values for {model.name}, found {len(q)}")
     q_si = model.q_to_si(q)

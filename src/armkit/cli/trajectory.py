@@ -1,183 +1,31 @@
 """`armkit traj`: a point-to-point or via-point trajectory case, its peaks and its figures.
 
-A case comes from a YAML file or from options (options override the file); joint values and
-limits are in the robot file's units (deg, mm, per second...). Via points (paper 4, Table 1)::
-
-    robot: tool_changer_6dof
-    joints: [2, 3, 5]              # the columns of points: 1-based numbers or joint names
-    times: [0, 2, 4, 5]            # s
-    points: [[50.4, -180, 130], [43.2, -166, 123], [35, -152, 116], [27, -137, 108]]
-    patterns: [3-3-3, 4-5-5, 5-5-5]
-    hold: [0, 0, 0, 0, 0, 0]       # optional: where the other joints stay (default 0)
-
-Point to point::
-
-    robot: inspection_6dof
-    start: [0, 0, 0, 0, 0, 0]
-    goal: [30, -45, 60, 0, 90, 0]
-    profiles: [quintic, jerk-limited]   # cubic | quintic | trapezoidal | jerk-limited
-    duration: 10                        # s, for cubic and quintic (default: shortest in limits)
-    jerk: 400                           # deg/s^3 (robot files carry no jerk limit)
-
-``velocity``, ``acceleration`` and ``jerk`` (one value or one per joint) replace the robot
-file's limits; ``sync: phase`` makes profiles straight lines in joint space.
+The case (`armkit.io.trajectory_cases`) comes from a YAML file or from options (options
+override the file), in the robot file's units. Positions outside the joint limits are bad
+input (exit 2); velocities and accelerations beyond the limits are reported per joint, where
+and by how much, and make the exit status 1 unless ``--allow-limits``.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated
 
 import numpy as np
 import typer
-from pydantic import Field, ValidationError, model_validator
 from rich.table import Table
 
-import armkit
 from armkit import trajectory as tj
-from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, output_folder, print_json, stdout
-from armkit.errors import InputError
+from armkit.cli.app import (EXIT_FAILED, NUMBERS, JsonFlag, SiFlag, app, output_folder,
+                            print_json, stdout)
+from armkit.cli.values import COORDINATE, DURATION, LIMIT, number, parse_numbers, robot_text
+from armkit.io.trajectory_cases import LimitExcess, TrajectoryCase, limit_excesses, read_case
 from armkit.model import SI, Robot
-from armkit.io.documents import StrictModel, read_yaml, validation_error
-
-Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
-Limit = float | list[float] | None
 
 
-class CaseFile(StrictModel):
-    """A trajectory case as its file (or the command's options) gives it, in file units."""
-
-    robot: str
-    start: list[float] | None = None
-    goal: list[float] | None = None
-    profiles: list[Profile] = ["quintic"]
-    duration: float | None = Field(None, gt=0)
-    joints: list[int | str] | None = None
-    times: list[float] | None = None
-    points: list[list[float]] | None = None
-    hold: list[float] | None = None
-    patterns: list[str | int] | None = None
-    velocity: Limit = None
-    acceleration: Limit = None
-    jerk: Limit = None
-    sync: Literal["time", "phase"] = "time"
-
-    @model_validator(mode="after")
-    def _one_kind(self):
-        p2p, via = self.start is not None or self.goal is not None, self.times is not None
-        if p2p == via or (p2p and (self.start is None or self.goal is None)) or \
-                (via and self.points is None):
-            raise ValueError("expected start and goal (point to point) or times and points "
-                             "(via points), found " + (
-                                 "both" if p2p and via else "an incomplete case"))
-        return self
-
-
-def _numbers(name: str, text: str | None) -> list[float] | None:
-    if text is None:
-        return None
-    try:
-        return [float(x) for x in text.replace(",", " ").split()]
-    except ValueError:
-        raise InputError(f"--{name}: expected numbers separated by commas, found {text!r}") \
-            from None
-
-
-def _case_document(source: str) -> dict | None:
-    """The document of a case file, or None if the source names a robot (a built-in name or
-    a robot file: a YAML file without a ``robot`` field)."""
-    if not source.endswith((".yaml", ".yml")):
-        return None
-    if not Path(source).is_file():
-        raise InputError(f"case: expected a case file or a robot, found no file {source}")
-    document = read_yaml(source)
-    return document if isinstance(document, dict) and "robot" in document else None
-
-
-def load_case(source: str, overrides: dict[str, Any]) -> tuple[CaseFile, bool]:
-    """The case from a file (or a robot) with the given options laid over it, and whether it
-    came from a case file."""
-    document = _case_document(source)
-    from_file = document is not None
-    where = source if from_file else "command line"
-    document = {**document} if from_file else {"robot": source}
-    document.update({k: v for k, v in overrides.items() if v is not None})
-    try:
-        return CaseFile.model_validate(document), from_file
-    except ValidationError as err:
-        raise validation_error(where, err, CaseFile) from None
-
-
-def _per_joint(robot: Robot, name: str, value: Limit, default: np.ndarray) -> np.ndarray:
-    """A limit per joint in SI from file units (one value for all, or one per joint)."""
-    if value is None:
-        return default
-    v = np.asarray(value, dtype=float).ravel()
-    if v.shape not in ((1,), (robot.n,)):
-        raise InputError(f"{name}: expected one value or {robot.n} (one per joint), "
-                         f"found {v.size}")
-    if not (v > 0).all():
-        raise InputError(f"{name}: expected positive limits, found {v.tolist()}")
-    return robot.q_to_si(np.broadcast_to(v, (robot.n,)))
-
-
-def _joint_index(robot: Robot, joint: int | str) -> int:
-    if isinstance(joint, int) and 1 <= joint <= robot.n:
-        return joint - 1
-    if isinstance(joint, str) and joint in robot.joint_names:
-        return robot.joint_names.index(joint)
-    if isinstance(joint, str) and joint.isdigit():
-        return _joint_index(robot, int(joint))
-    raise InputError(f"joints: expected joint numbers 1..{robot.n} or names "
-                     f"({', '.join(robot.joint_names)}), found {joint!r}")
-
-
-def build(case: CaseFile, robot: Robot) -> tuple[dict[str, tj.Trajectory], list[int]]:
-    """The case's trajectories by label (SI) and the joints that move (0-based)."""
-    vmax = _per_joint(robot, "velocity", case.velocity, robot.chain.velocity_limits)
-    amax = _per_joint(robot, "acceleration", case.acceleration, robot.chain.acceleration_limits)
-    jmax = _per_joint(robot, "jerk", case.jerk, np.full(robot.n, np.inf))
-    if case.times is None:
-        q0, qf = (robot.q_to_si(_joint_vector(robot, name, v))
-                  for name, v in (("start", case.start), ("goal", case.goal)))
-        out = {}
-        for name in dict.fromkeys(case.profiles):
-            if name in ("cubic", "quintic"):
-                law = tj.cubic if name == "cubic" else tj.quintic
-                out[name] = law(q0, qf, case.duration, vmax=vmax, amax=amax, jmax=jmax)
-            elif name == "trapezoidal":
-                out[name] = tj.trapezoidal(q0, qf, vmax, amax, sync=case.sync)
-            else:
-                if not np.isfinite(jmax).all():
-                    raise InputError("jerk: expected a jerk limit for jerk-limited profiles "
-                                     "(robot files carry none), found none")
-                out[name] = tj.jerk_limited(q0, qf, vmax, amax, jmax, sync=case.sync)
-        return out, [j for j in range(robot.n) if q0[j] != qf[j]]
-    joints = [_joint_index(robot, j) for j in (case.joints or range(1, robot.n + 1))]
-    if any(len(p) != len(joints) for p in case.points):
-        raise InputError(f"points: expected rows of {len(joints)} values (one per joint in "
-                         f"joints), found rows of {[len(p) for p in case.points]}")
-    points = np.asarray(case.points, dtype=float)
-    hold = (robot.q_to_si(_joint_vector(robot, "hold", case.hold)) if case.hold is not None
-            else np.clip(0.0, robot.lower, robot.upper))
-    q = np.tile(hold, (len(points), 1))
-    q[:, joints] = robot.q_to_si(_full(robot, joints, points))[:, joints]
-    patterns = case.patterns or (list(tj.PAPER_PATTERNS) if len(points) == 4 else [3, 5])
-    return tj.patterns(case.times, q, patterns), joints
-
-
-def _joint_vector(robot: Robot, name: str, values: list[float]) -> np.ndarray:
-    if len(values) != robot.n:
-        raise InputError(f"{name}: expected {robot.n} joint values for {robot.name}, "
-                         f"found {len(values)}")
-    return np.asarray(values, dtype=float)
-
-
-def _full(robot: Robot, joints: list[int], points: np.ndarray) -> np.ndarray:
-    """Points of some joints placed in rows of all joints (file units), so units convert."""
-    full = np.zeros((len(points), robot.n))
-    full[:, joints] = points
-    return full
+def _numbers(name: str, text: str | None, low: float = -COORDINATE,
+             high: float = COORDINATE) -> list[float] | None:
+    return None if text is None else parse_numbers(f"--{name}", text, low=low, high=high)
 
 
 def _rows(robot: Robot, tr: tj.Trajectory, s: tj.Stats, joints: list[int], units) -> list[dict]:
@@ -211,8 +59,9 @@ def traj(
     profile: Annotated[list[str] | None, typer.Option(
         help="cubic, quintic, trapezoidal or jerk-limited; repeat to compare "
              "(default quintic).")] = None,
-    duration: Annotated[float | None, typer.Option(help="s, for cubic and quintic "
-                                                        "(default: shortest in limits).")] = None,
+    duration: Annotated[float | None, typer.Option(
+        help="s, for cubic and quintic (default: shortest in limits).",
+        parser=number(*DURATION, unit="s"))] = None,
     times: Annotated[str | None, typer.Option(help="Knot times (s), e.g. 0,2,4,5.")] = None,
     point: Annotated[list[str] | None, typer.Option(
         help="Via point (values of --joints, file units); repeat once per knot.")] = None,
@@ -231,49 +80,83 @@ def traj(
     sync: Annotated[str | None, typer.Option(help="time (default) or phase (a straight "
                                                   "line in joint space).")] = None,
     out: Annotated[Path, typer.Option(help="Directory for the figures.")] = Path("."),
+    allow_limits: Annotated[bool, typer.Option(
+        "--allow-limits", help="Exit 0 even where velocities or accelerations go beyond the "
+                               "limits (they are still reported).")] = False,
     as_json: JsonFlag = False,
     si: SiFlag = False,
 ) -> None:
     """Point-to-point or via-point trajectories: the table of peaks, and their figures."""
     overrides = {"start": _numbers("start", start), "goal": _numbers("goal", goal),
-                 "profiles": profile, "duration": duration, "times": _numbers("times", times),
+                 "profiles": profile, "duration": duration,
+                 "times": _numbers("times", times, -DURATION[1], DURATION[1]),
                  "points": [_numbers("point", p) for p in point] if point else None,
                  "joints": joints.replace(",", " ").split() if joints else None,
                  "hold": _numbers("hold", hold), "patterns": pattern, "sync": sync,
-                 "velocity": _numbers("velocity", velocity),
-                 "acceleration": _numbers("acceleration", acceleration),
-                 "jerk": _numbers("jerk", jerk)}
-    spec, from_file = load_case(case, overrides)
+                 "velocity": _numbers("velocity", velocity, *LIMIT),
+                 "acceleration": _numbers("acceleration", acceleration, *LIMIT),
+                 "jerk": _numbers("jerk", jerk, *LIMIT)}
+    robot_text("case", case)
     out = output_folder(out)
-    robot = armkit.robot(spec.robot)
-    trajectories, moving = build(spec, robot)
-    table = tj.compare(trajectories)
+    spec = read_case(case, overrides)
+    robot = spec.robot
+    table = tj.compare(spec.trajectories)
+    excesses = limit_excesses(spec)
     units = SI if si else robot.units
-    stem = Path(case).stem if from_file else f"{robot.name}_traj"
-    figures = _figures(robot, trajectories, moving, out, stem, via=spec.times is not None)
-    results = [{"label": label, "duration": s.duration, "knots": trajectories[label].knots,
-                "joints": _rows(robot, trajectories[label], s, moving, units)}
+    stem = Path(case).stem if spec.source else f"{robot.name}_traj"
+    figures = _figures(spec, out, stem)
+    results = [{"label": label, "duration": s.duration, "knots": spec.trajectories[label].knots,
+                "joints": _rows(robot, spec.trajectories[label], s, spec.moving, units)}
                for label, s in table.items()]
+    beyond = [_excess_row(robot, e, units) for e in excesses]
     if as_json:
-        return print_json({"robot": robot.name, "units": {"length": units.length,
-                                                          "angle": units.angle},
-                           "case": "via points" if spec.times is not None else "point to point",
-                           "trajectories": results, "figures": [str(f) for f in figures]})
-    _print(robot, results, figures)
+        print_json({"robot": robot.name, "units": {"length": units.length,
+                                                   "angle": units.angle},
+                    "case": "via points" if spec.via else "point to point",
+                    "trajectories": results, "figures": [str(f) for f in figures],
+                    "limits": {"within": not excesses, "allowed": allow_limits,
+                               "beyond": beyond}})
+    else:
+        _print(robot, results, figures)
+        _print_excesses(beyond, allow_limits)
+    if excesses and not allow_limits:
+        raise typer.Exit(EXIT_FAILED)
 
 
-def _figures(robot: Robot, trajectories: dict, moving: list[int], out: Path, stem: str,
-             via: bool) -> list[Path]:
+def _excess_row(robot: Robot, e: LimitExcess, units) -> dict:
+    """A limit excess in `units` (the file's, or SI) for print and JSON."""
+    scale = 1.0 if units is SI else float(robot.q_from_si(np.ones(robot.n))[e.joint])
+    unit = units.of_joint(robot.chain.revolute[e.joint])
+    return {"trajectory": e.trajectory, "joint": robot.joint_names[e.joint],
+            "number": e.joint + 1, "quantity": e.quantity, "time": e.time,
+            "peak": e.peak * scale, "limit": e.limit * scale, "ratio": e.ratio,
+            "unit": f"{unit}/s" if e.quantity == "velocity" else f"{unit}/s²"}
+
+
+def _print_excesses(beyond: list[dict], allowed: bool) -> None:
+    if not beyond:
+        stdout.print("within the velocity and acceleration limits")
+        return
+    stdout.print(f"beyond the limits{' (allowed: --allow-limits)' if allowed else ''}:")
+    for b in beyond:
+        stdout.print(f"  {b['trajectory']}: joint {b['number']} {b['joint']} {b['quantity']} "
+                     f"{_fmt(b['peak'])} {b['unit']} at t = {b['time']:.3g} s, limit "
+                     f"{_fmt(b['limit'])} {b['unit']} ({b['ratio']:.3g} times)", markup=False)
+
+
+def _figures(spec: TrajectoryCase, out: Path, stem: str) -> list[Path]:
     # Here, not at the top: matplotlib would slow down every other command's start.
     from armkit.report.trajectory import patterns_figure, tool_figure
 
-    shown = moving or list(range(robot.n))
+    robot, trajectories = spec.robot, spec.trajectories
+    shown = spec.moving or list(range(robot.n))
     title = (f"{robot.name}: joint{'s' if len(shown) > 1 else ''} "
              + ", ".join(str(j + 1) for j in shown) +
              (" through via points at t = " + ", ".join(
-                 f"{t:g}" for t in next(iter(trajectories.values())).knots) + " s" if via
+                 f"{t:g}" for t in next(iter(trajectories.values())).knots) + " s" if spec.via
               else ", point to point"))
-    joints = patterns_figure(robot, trajectories, shown, rows=3 if via else 4, title=title)
+    joints = patterns_figure(robot, trajectories, shown, rows=3 if spec.via else 4, title=title,
+                             vmax=spec.velocity_limits, amax=spec.acceleration_limits)
     tool = tool_figure(robot, {k: tj.tool_motion(robot, v) for k, v in trajectories.items()})
     paths = [out / f"{stem}_joints.png", out / f"{stem}_tool.png"]
     for fig, path in zip((joints, tool), paths):

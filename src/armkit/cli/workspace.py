@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import math
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -12,38 +12,76 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 import armkit
 from armkit.cli.app import JsonFlag, SiFlag, app, output_folder, print_json, stderr, stdout
 from armkit.cli.robots import RobotArg
-from armkit.errors import InputError
+from armkit.cli.values import COORDINATE, check_number, load_robot, number
 from armkit.model import SI
 
 PROGRESS_FROM = 2_000_000       # samples; shorter runs end before a bar would help
 CONVERGED = 0.01                # volume growth over the last doubling below which we say so
+# Samples one command takes: in this process about an hour at a few million samples a
+# second on one core; on a Dask cluster a hundred times that. More cannot finish in a sitting.
+MOST_SAMPLES = 10**10
+MOST_SAMPLES_DASK = 10**12
+ESTIMATE_FROM = 5.0             # s: runs expected to take longer say so before they go on
+REPORT_EVERY = 0.1              # fraction of the samples between two lines without a terminal
 
 
-def _count(text: str) -> int:
-    """-n as people write it: 1000000, 1_000_000 or 1e6."""
-    try:
-        value = float(text.replace("_", ""))
-    except ValueError:
-        raise InputError(f"N: expected a whole number such as 1000000 or 1e6, "
-                         f"found {text!r}") from None
-    if not (math.isfinite(value) and value == int(value)):
-        raise InputError(f"N: expected a whole number such as 1000000 or 1e6, found {text!r}")
-    return int(value)
+def _count(text: str, most: int, where: str) -> int:
+    """-n as people write it: 1000000, 1_000_000 or 1e6, at most `most`."""
+    return int(check_number("-n", text, 1, most, integer=True,
+                            unit=f"samples {where}"))
+
+
+class _Lines:
+    """Progress for a log or a pipe, where a bar cannot redraw: after the first chunk, an
+    estimate of the time left if the run is long, then a line every tenth of the samples."""
+
+    def __init__(self, samples: int) -> None:
+        self.samples, self.started, self.next_report = samples, time.perf_counter(), None
+
+    def __call__(self, done: int, total: int) -> None:
+        elapsed = time.perf_counter() - self.started
+        if self.next_report is None:
+            left = elapsed * (total - done) / max(done, 1)
+            if left < ESTIMATE_FROM:
+                self.next_report = total + 1        # short: nothing to say
+                return
+            stderr.print(f"sampling {total:,} joint vectors: about {_duration(left)} left "
+                         f"({done / elapsed:,.0f} samples/s so far)", markup=False)
+            self.next_report = done + REPORT_EVERY * total
+        elif done >= self.next_report and done < total:
+            left = elapsed * (total - done) / done
+            stderr.print(f"sampled {done:,} of {total:,} ({100 * done / total:.0f} %), about "
+                         f"{_duration(left)} left", markup=False)
+            self.next_report = done + REPORT_EVERY * total
+
+
+def _duration(seconds: float) -> str:
+    for size, unit in ((86400, "days"), (3600, "h"), (60, "min")):
+        if seconds >= 2 * size:
+            return f"{seconds / size:.0f} {unit}"
+    return f"{seconds:.0f} s"
 
 
 @app.command()
 def workspace(robot: RobotArg,
               n: Annotated[str, typer.Option("-n", metavar="N",
-                                             help="Samples (joint vectors), e.g. 1e6.")] = "1e6",
-              seed: Annotated[int, typer.Option(help="Seed of the joint samples.")] = 0,
+                                             help="Samples (joint vectors), e.g. 1e6; at most "
+                                                  "1e10 in this process, 1e12 on Dask.")]
+              = "1e6",
+              seed: Annotated[int, typer.Option(help="Seed of the joint samples.",
+                                                parser=number(0, 1e18, integer=True))]
+              = 0,
               resolution: Annotated[float | None, typer.Option(
-                  help="Voxel edge, file units (default: 1/50 of the arm's span, rounded).")]
+                  help="Voxel edge, file units (default: 1/50 of the arm's span, rounded).",
+                  parser=number(0, COORDINATE, low_open=True))]
               = None,
               height: Annotated[float | None, typer.Option(
-                  help="Height of the horizontal section, file units (default: mid-height).")]
+                  help="Height of the horizontal section, file units (default: mid-height).",
+                  parser=number())]
               = None,
               azimuth: Annotated[float, typer.Option(
-                  help="Azimuth of the vertical section through the z axis, file units.")]
+                  help="Azimuth of the vertical section through the z axis, file units.",
+                  parser=number(-1e6, 1e6))]
               = 0.0,
               out: Annotated[Path, typer.Option(help="Folder for the figures.")] = Path("."),
               scheduler: Annotated[str | None, typer.Option(
@@ -54,22 +92,25 @@ def workspace(robot: RobotArg,
     # Here, not at the top: matplotlib would slow down every other command's start.
     from armkit.report.workspace import default_height, save_workspace_figures
 
-    model = armkit.robot(robot)
+    model = load_robot(robot)
     units = SI if si else model.units
-    samples = _count(n)
+    samples = (_count(n, MOST_SAMPLES, "in this process (--scheduler for more)")
+               if scheduler is None else _count(n, MOST_SAMPLES_DASK, "on Dask"))
     out = output_folder(out)
     kwargs = dict(seed=seed, scheduler=scheduler)
     if resolution is not None:
-        if not (math.isfinite(resolution) and resolution > 0):
-            raise InputError(f"--resolution: expected a positive voxel edge in "
-                             f"{model.units.length}, found {resolution:g}")
         kwargs["resolution"] = float(model.units.length_to_si(resolution))
-    with Progress(TextColumn("sampling"), BarColumn(), MofNCompleteColumn(),
-                  TimeRemainingColumn(), console=stderr, transient=True,
-                  disable=samples < PROGRESS_FROM) as bar:
-        task = bar.add_task("samples", total=samples)
-        ws = armkit.workspace(model, samples,
-                              progress=lambda done, _: bar.update(task, completed=done), **kwargs)
+    if samples < PROGRESS_FROM:
+        ws = armkit.workspace(model, samples, **kwargs)
+    elif stderr.is_terminal:
+        with Progress(TextColumn("sampling"), BarColumn(), MofNCompleteColumn(),
+                      TimeRemainingColumn(), console=stderr, transient=True) as bar:
+            task = bar.add_task("samples", total=samples)
+            ws = armkit.workspace(model, samples,
+                                  progress=lambda done, _: bar.update(task, completed=done),
+                                  **kwargs)
+    else:
+        ws = armkit.workspace(model, samples, progress=_Lines(samples), **kwargs)
     z = default_height(ws) if height is None else float(model.units.length_to_si(height))
     phi = float(model.units.angle_to_si(azimuth))
     figures = save_workspace_figures(ws, out, z, phi, units)

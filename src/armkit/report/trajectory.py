@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
+from numpy.typing import NDArray
 
 from armkit.errors import InputError
 from armkit.model.robot import Robot
@@ -59,7 +60,8 @@ def _in_file_units(robot: Robot, tr: Trajectory, count: int):
 
 def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
                     joints: Sequence[int] | None = None, *, rows: int = 3, count: int = 600,
-                    title: str | None = None) -> Figure:
+                    title: str | None = None, vmax: NDArray | None = None,
+                    amax: NDArray | None = None) -> Figure:
     """Displacement, velocity, acceleration (rows) of chosen joints, one column per trajectory.
 
     Parameters
@@ -76,6 +78,10 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
         4 adds jerk.
     count : int
         Samples per curve.
+    vmax, amax : ndarray, shape (n,), optional
+        Velocity and acceleration limits (SI) drawn as dashed lines in each joint's colour;
+        default the robot's. Position limits are drawn when a curve comes within a tenth of
+        its range of them.
 
     Returns
     -------
@@ -88,7 +94,9 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
         raise InputError(f"rows: expected 3 or 4, found {rows!r}")
     first = next(iter(trajectories.values()))
     joints = _joints(robot, joints, first)
-    fig = Figure(figsize=(4.2 * len(trajectories) + 1, 2.8 * rows + 0.1), layout="constrained")
+    limits = _limits(robot, vmax, amax)
+    fig = Figure(figsize=(4.2 * len(trajectories) + 2.6, 2.8 * rows + 0.1),
+                 layout="constrained")
     axes = fig.subplots(rows, len(trajectories), sharex=True, sharey="row", squeeze=False)
     for col, (name, tr) in enumerate(trajectories.items()):
         _joints(robot, joints, tr)
@@ -97,6 +105,7 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
             ax = axes[row, col]
             for colour, j in zip(COLOURS, joints):
                 ax.plot(t, values[row][:, j], color=colour, lw=1.6, label=joint_label(robot, j))
+                _draw_limit(ax, limits[row][j], values[row][:, j], colour)
             for knot in tr.knots:
                 ax.axvline(knot, color="0.6", lw=0.8, ls=":")
             ax.grid(alpha=0.3)
@@ -106,68 +115,146 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
                 ax.set_ylabel(f"{QUANTITIES[row]} ({_units(robot, joints, row)})")
             if row == rows - 1:
                 ax.set_xlabel("t (s)")
-    axes[0, 0].legend(loc="best", fontsize=8)
+    _legend(fig, axes[0, -1], limits_drawn=_any_drawn(axes))
     fig.suptitle(title or f"{robot.name}: " + ", ".join(trajectories), fontsize=12)
     return fig
 
 
+def _limits(robot: Robot, vmax: NDArray | None, amax: NDArray | None) -> list[NDArray]:
+    """Per quantity (position, velocity, acceleration, jerk) the limits in file units, as
+    (n, 2) lower/upper rows; NaN where there is none."""
+    v = robot.chain.velocity_limits if vmax is None else np.asarray(vmax, dtype=float)
+    a = robot.chain.acceleration_limits if amax is None else np.asarray(amax, dtype=float)
+    scale = robot.q_from_si(np.ones(robot.n))
+    position = np.column_stack([robot.q_from_si(robot.lower), robot.q_from_si(robot.upper)])
+    out = [position]
+    for limit in (v, a):
+        limit = np.where(np.isfinite(limit), limit * scale, np.nan)
+        out.append(np.column_stack([-limit, limit]))
+    out.append(np.full((robot.n, 2), np.nan))
+    return [np.where(np.isfinite(x), x, np.nan) for x in out]
+
+
+_LIMIT_STYLE = {"ls": "--", "lw": 1.0, "alpha": 0.8}
+
+
+def _draw_limit(ax, bounds: NDArray, values: NDArray, colour: str,
+                label: str | None = None) -> bool:
+    """Dashed lines at a joint's limits (file units) where the curve comes within a tenth of
+    its span of them, or beyond; the other limit lines would only squash the curves."""
+    drawn = False
+    span = max(float(np.ptp(values)), 1e-12)
+    for bound, extreme in zip(bounds, (values.min(), values.max())):
+        if np.isfinite(bound) and abs(extreme - bound) <= 0.1 * max(span, abs(bound)):
+            ax.axhline(bound, color=colour, label=label, **_LIMIT_STYLE)
+            drawn, label = True, None
+    return drawn
+
+
+def _any_drawn(axes) -> bool:
+    return any(line.get_linestyle() == "--" and len(set(line.get_ydata())) == 1
+               for ax in np.ravel(axes) for line in ax.get_lines())
+
+
+def _legend(fig: Figure, ax, limits_drawn: bool) -> None:
+    """One legend outside the panels: the lines of `ax`, and the limit style if drawn."""
+    from matplotlib.lines import Line2D
+
+    handles, labels = [], []
+    for line in ax.get_lines():
+        label = line.get_label()
+        if not label.startswith("_") and label not in labels and line.get_linestyle() != "--":
+            handles.append(line)
+            labels.append(label)
+    if limits_drawn:
+        handles.append(Line2D([], [], color="0.3", **_LIMIT_STYLE))
+        labels.append("limit (dashed, joint's colour)")
+    ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
+              borderaxespad=0.0)
+
+
 def motion_figure(robot: Robot, tr: Trajectory, joints: Sequence[int] | None = None, *,
-                  count: int = 600, title: str | None = None) -> Figure:
-    """Position, velocity, acceleration and jerk (columns) of each chosen joint (rows)."""
+                  count: int = 600, title: str | None = None, vmax: NDArray | None = None,
+                  amax: NDArray | None = None) -> Figure:
+    """Position, velocity, acceleration and jerk (columns) of each chosen joint (rows).
+
+    Each panel's y axis names the quantity and its unit; the joint's position limits and its
+    velocity and acceleration limits (`vmax`, `amax`, SI; default the robot's) are dashed
+    lines where the curve comes near them.
+    """
     joints = _joints(robot, joints, tr)
     t, values = _in_file_units(robot, tr, count)
-    fig = Figure(figsize=(14, 1.9 * len(joints) + 1.2), layout="constrained")
+    limits = _limits(robot, vmax, amax)
+    fig = Figure(figsize=(15, 2.1 * len(joints) + 1.2), layout="constrained")
     axes = fig.subplots(len(joints), len(QUANTITIES), sharex=True, squeeze=False)
     for row, j in enumerate(joints):
+        colour = COLOURS[row % len(COLOURS)]
         for col in range(len(QUANTITIES)):
             ax = axes[row, col]
-            ax.plot(t, values[col][:, j], color=COLOURS[row % len(COLOURS)], lw=1.4)
+            ax.plot(t, values[col][:, j], color=colour, lw=1.4, label=joint_label(robot, j))
+            _draw_limit(ax, limits[col][j], values[col][:, j], "tab:red", label="limit")
             for knot in tr.knots:
                 ax.axvline(knot, color="0.6", lw=0.8, ls=":")
             ax.grid(alpha=0.3)
             if row == 0:
                 ax.set_title(QUANTITIES[col])
-            if col == 0:
-                ax.set_ylabel(joint_label(robot, j), fontsize=9)
-            ax.annotate(joint_unit(robot, j) + SUFFIX[col], (0.99, 0.96),
-                        xycoords="axes fraction", ha="right", va="top", fontsize=8,
-                        color="0.35")
+            ax.set_ylabel(f"{joint_label(robot, j)}\n({joint_unit(robot, j)}{SUFFIX[col]})"
+                          if col == 0 else f"{joint_unit(robot, j)}{SUFFIX[col]}", fontsize=9)
+            if any(line.get_label() == "limit" for line in ax.get_lines()):
+                ax.legend(loc="best", fontsize=7)
             if row == len(joints) - 1:
                 ax.set_xlabel("t (s)")
-    fig.suptitle(title or f"{robot.name}: {tr.label}, {tr.duration:.4g} s", fontsize=12)
+    fig.suptitle(title or f"{robot.name}: {tr.label}, {tr.duration:.4g} s (dashed: the limits a "
+                 f"curve comes near)",
+                 fontsize=12)
     return fig
 
 
 def tool_figure(robot: Robot, motions: Mapping[str, ToolMotion], *,
-                title: str | None = None) -> Figure:
+                title: str | None = None, yaw: bool = False) -> Figure:
     """The tool's position, linear velocity and linear acceleration (rows) per motion (columns).
 
     Components x, y, z in the base frame and, for velocity and acceleration, the magnitude; in
-    the robot file's length unit.
+    the robot file's length unit. With `yaw` (a position + yaw task), a fourth row draws the
+    tool's yaw (the heading of its x axis about the base z axis) in the file's angle unit.
     """
     if not motions:
         raise InputError("motions: expected at least one, found none")
-    unit = robot.units.length
-    fig = Figure(figsize=(4.2 * len(motions) + 1, 8.5), layout="constrained")
-    axes = fig.subplots(3, len(motions), sharex=True, sharey="row", squeeze=False)
+    unit, angle = robot.units.length, robot.units.angle
+    rows = 4 if yaw else 3
+    fig = Figure(figsize=(4.2 * len(motions) + 2.4, 2.7 * rows + 0.4), layout="constrained")
+    axes = fig.subplots(rows, len(motions), sharex=True, sharey="row", squeeze=False)
     labels = ("position", "velocity", "acceleration")
     for col, (name, m) in enumerate(motions.items()):
-        rows = (m.position, m.velocity[:, :3], m.acceleration[:, :3])
-        for row, data in enumerate(rows):
+        data_rows = (m.position, m.velocity[:, :3], m.acceleration[:, :3])
+        for row, data in enumerate(data_rows):
             ax = axes[row, col]
             data = robot.units.length_from_si(data)
             for i, axis in enumerate("xyz"):
                 ax.plot(m.t, data[:, i], color=COLOURS[i], lw=1.5, label=axis)
             if row:
-                ax.plot(m.t, np.linalg.norm(data, axis=1), color="k", lw=1.2, ls="--",
+                ax.plot(m.t, np.linalg.norm(data, axis=1), color="k", lw=1.2, ls="-.",
                         label="magnitude")
-            ax.grid(alpha=0.3)
-            if row == 0:
-                ax.set_title(name)
             if col == 0:
                 ax.set_ylabel(f"tool {labels[row]} ({unit}{SUFFIX[row]})")
-            if row == 2:
-                ax.set_xlabel("t (s)")
-    axes[1, 0].legend(loc="best", fontsize=8)
-    fig.suptitle(title or f"{robot.name}: tool motion, base frame", fontsize=12)
+            if len(motions) > 1 and row == 0:
+                ax.set_title(name)
+            ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
+                      borderaxespad=0.0) if col == len(motions) - 1 else None
+        if yaw:
+            ax = axes[3, col]
+            heading = np.unwrap(np.arctan2(m.pose[:, 1, 0], m.pose[:, 0, 0]))
+            ax.plot(m.t, robot.units.angle_from_si(heading), color=COLOURS[4], lw=1.5,
+                    label="yaw")
+            if col == 0:
+                ax.set_ylabel(f"tool yaw ({angle})")
+            if col == len(motions) - 1:
+                ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
+                          borderaxespad=0.0)
+        for ax in axes[:, col]:
+            ax.grid(alpha=0.3)
+        axes[-1, col].set_xlabel("t (s)")
+    only = next(iter(motions)) if len(motions) == 1 else None
+    fig.suptitle(title or (f"{robot.name}: tool motion ({only}), base frame" if only else
+                           f"{robot.name}: tool motion, base frame"), fontsize=12)
     return fig

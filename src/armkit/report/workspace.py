@@ -9,7 +9,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import matplotlib
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Circle, Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from armkit.model.robot import Units
@@ -18,6 +21,7 @@ from armkit.sampled_workspace import Workspace
 _POINT = {"s": 0.6, "alpha": 0.35, "linewidths": 0, "color": "tab:blue", "rasterized": True}
 _BASE = {"marker": "+", "color": "tab:red", "s": 60, "linewidths": 1.2, "zorder": 3}
 _PROJECTIONS = (("x", "y", 0, 1), ("x", "z", 0, 2), ("y", "z", 1, 2))
+_REACH = {"color": "tab:red", "ls": "--", "lw": 1.0, "alpha": 0.8}
 
 
 def workspace_figure(ws: Workspace, units: Units | None = None) -> Figure:
@@ -52,8 +56,13 @@ def workspace_figure(ws: Workspace, units: Units | None = None) -> Figure:
     ax.set_title("3-D cloud (colour: z)")
     for k, (u, v, i, j) in enumerate(_PROJECTIONS, start=1):
         ax = fig.add_subplot(grid[k])
-        ax.scatter(p[:, i], p[:, j], **_POINT)
-        ax.scatter([0], [0], **_BASE)
+        ax.scatter(p[:, i], p[:, j], label="tool positions", **_POINT)
+        ax.scatter([0], [0], label="base origin", **_BASE)
+        # The reach bounds every projection: the largest distance from the base origin, and
+        # on XY the largest distance from the base z axis.
+        radius = float(units.length_from_si(ws.radial_reach if k == 1 else ws.reach))
+        ax.add_patch(Circle((0.0, 0.0), radius, fill=False, label="reach"
+                            if k != 1 else "reach from the z axis", **_REACH))
         ax.set_aspect("equal", adjustable="datalim")
         ax.xaxis.set_major_locator(MaxNLocator(5))
         ax.yaxis.set_major_locator(MaxNLocator(5))
@@ -61,6 +70,11 @@ def workspace_figure(ws: Workspace, units: Units | None = None) -> Figure:
         ax.set_ylabel(f"{v} ({unit})")
         ax.set_title(f"{u.upper()}{v.upper()} projection")
         ax.grid(alpha=0.3)
+        ax.legend(handles=[
+            Line2D([], [], marker=".", ls="", color=_POINT["color"], label="tool positions"),
+            Line2D([], [], marker="+", ls="", color=_BASE["color"], ms=8, label="base origin"),
+            Line2D([], [], label="reach from the z axis" if k == 1 else "reach", **_REACH)],
+            loc="upper right", fontsize=7)
     fig.suptitle(f"{ws.robot.name}: workspace of the tool origin, {ws.samples:,} samples "
                  f"(showing {len(p):,})")
     return fig
@@ -97,6 +111,8 @@ def section_figure(ws: Workspace, height: float | None = None, azimuth: float = 
     height = default_height(ws) if height is None else height
     unit = units.length
     fig = Figure(figsize=(12, 5.2), layout="constrained")
+    voxel = units.length_from_si(ws.resolution)
+    plt_blue = matplotlib.colormaps["Blues"](1 / 1.4)      # the colour of an occupied cell
     sections = (ws.horizontal_section(height), ws.vertical_section(azimuth))
     for k, section in enumerate(sections, start=1):
         ax = fig.add_subplot(1, 2, k)
@@ -112,10 +128,13 @@ def section_figure(ws: Workspace, height: float | None = None, azimuth: float = 
                      f"{units.angle_from_si(section.position):.6g} {units.angle}")
             ax.set_xlabel(f"r ({unit}), signed distance from the z axis")
             ax.set_ylabel(f"z ({unit})")
-        ax.scatter([0], [0], **_BASE)
+        ax.scatter([0], [0], label="base origin", **_BASE)
+        ax.add_patch(Rectangle((0, 0), 0, 0, color=plt_blue, label=f"occupied {voxel:.6g} "
+                               f"{unit} cell"))
         ax.set_aspect("equal")
         ax.margins(0.03)
         ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
         ax.set_title(f"{where}\noccupied area {area:.4g} {unit}\u00b2")
     voxel = units.length_from_si(ws.resolution)
     fig.suptitle(f"{ws.robot.name}: workspace sections, {voxel:.6g} {unit} cells, "
