@@ -13,6 +13,7 @@ from armkit.kinematics import (condition_number, fk, fk_frames, jacobian, jacobi
                                jacobian_dot, manipulability, min_singular_value,
                                singular_values, tool_acceleration, tool_velocity)
 from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
+from armkit.kinematics.ik import IKSolver, IKTrack
 from armkit.model import Robot, load_robot, robot, robots, save_robot
 from armkit.trajectory import (Trajectory, cubic, jerk_limited, quintic, retime, spline,
                                tool_motion, trapezoidal)
@@ -38,3 +39,4 @@ __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot",
            "ik", "ik_solutions", "IKResult", "IKSolutions", "Trajectory", "cubic", "quintic",
            "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", "workspace",
            "Workspace", "Section", *_DRIVES]
+__all__ += ["IKSolver", "IKTrack"]

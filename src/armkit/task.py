@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
+from armkit.kinematics.ik import IKResult, IKSolutions, IKSolver
 from armkit.model import Robot, robot as load
 from armkit.spatial import pose_from_xyz_rpy
 from armkit.trajectory import Trajectory, quintic
@@ -80,8 +80,9 @@ def run_demo(out: Path | None = None, task: DemoTask | None = None) -> DemoRepor
     task = task or DemoTask()
     robot = load(task.robot)
     T_target = task.T_base_camera @ task.target_in_camera
-    solutions = ik_solutions(robot, T_target)
-    result = ik(robot, T_target, task.q_current)
+    solver = IKSolver(robot)
+    solutions = solver.solutions(T_target)
+    result = solver.solve(T_target, task.q_current)
     if not result.success:
         return DemoReport(robot, task, T_target, solutions, result, None, np.empty(0),
                           np.empty((0, robot.n)), None, ())
