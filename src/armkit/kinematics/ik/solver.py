@@ -414,10 +414,12 @@ class IKSolver:
                                    np.where(any_reached, OUTSIDE_JOINT_LIMITS, OUT_OF_REACH)
                                    ).astype(object)
         state["method"][:] = f"analytic:{family.name}"
-        # What the closed form misses short of the reach bound goes to the numeric solver,
-        # from the closest branch: at a singularity (a wrist with axes 4 and 6 aligned) the
-        # solutions form a continuum, and the one branch the closed form picks may not close.
-        state["numeric"] = (~any_usable & ~beyond if request.method == "auto"
+        # What the closed form misses goes to the numeric solver, from the closest branch: at a
+        # singularity (a wrist with axes 4 and 6 aligned) the solutions form a continuum, and
+        # the one branch the closed form picks may not close. Past the reach bound one attempt
+        # finds the closest pose inside the limits (a telescope's branch may reach the target
+        # outside them).
+        state["numeric"] = (~any_usable if request.method == "auto"
                             else np.zeros(N, dtype=bool))
         state["method"][state["numeric"]] = f"analytic:{family.name}+lm"
         state["polish"] = True
