@@ -11,13 +11,16 @@ reasons come from `armkit.kinematics.ik.reasons`.
 
 from __future__ import annotations
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from armkit.kinematics.ik.choose import CRITERIA
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, REASONS,
                                           SINGULAR, not_converged)
-from armkit.kinematics.ik.solver import (METHODS, IKResult, IKSolutions, IKSolver, IKTrack,
-                                         default_mask, reach_bound)
+from armkit.kinematics.ik.solver import (BANK_SAMPLES, METHODS, IKResult, IKSolutions, IKSolver,
+                                         IKTrack, default_mask, reach_bound)
+
+BANK_FROM = 64      # targets per ik() call from which a seed bank pays for its building
 from armkit.kinematics.ik.task import NAMED_MASKS
 from armkit.model.robot import Robot
 
@@ -30,8 +33,11 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     """Joint positions that put the tool at the target pose: ``IKSolver(robot).solve(...)``.
 
     Parameters and result as `IKSolver.solve` (`threads` as `IKSolver`). Each call derives
-    the robot's solver anew; for many calls on one robot, hold an `IKSolver` (its seed bank,
-    about 1 ms to build, is then built once).
+    the robot's solver anew and keeps nothing. The seed bank (4096 sampled configurations,
+    about 1 ms to build) is built only for a batch of `BANK_FROM` targets or more; fewer
+    targets start from q0 (or the middle of the limits), then from random configurations,
+    which costs about as much per target as searching a bank. For many calls on one robot,
+    hold an `IKSolver`: its bank is built once.
 
     Examples
     --------
@@ -42,7 +48,10 @@ def ik(robot: Robot, target: ArrayLike, q0: ArrayLike | None = None, *,
     >>> result.success, result.reason, result.method
     (True, 'ok', 'analytic:spherical_wrist')
     """
-    return IKSolver(robot, threads=threads).solve(
+    targets = np.size(target) // 16
+    solver = IKSolver(robot, samples=BANK_SAMPLES if targets >= BANK_FROM else 0,
+                      threads=threads)
+    return solver.solve(
         target, q0, mask=mask, method=method, criterion=criterion, weights=weights,
         tol_position=tol_position, tol_rotation=tol_rotation, max_iter=max_iter,
         restarts=restarts, seed=seed)

@@ -256,16 +256,16 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
     (N,) summed over attempts, and errors (N, 2): position (m) and rotation (rad) error of
     q_out under the task, by forward kinematics. Returns (targets done, cause).
 
-    budget = (max_iter, restarts, method, seed, follow, max_step). Solving (follow 0): each
-    target from its starts (N, S, n), then random restarts, then a long polish of its best
-    point; returns (last, 0). Following (follow 1): target t starts from the solution of t - 1
+    budget = (max_iter, restarts, method, seed, follow, max_step, polish). Solving (follow
+    0): each target from its starts (N, S, n), then random restarts, then (if polish) a long
+    run from its best point; returns (last, 0). Following (follow 1): target t starts from the solution of t - 1
     (the first from starts[first, 0]), with no restart; stops at the first target not solved
     (cause 1) or, after the first, whose solution moved a joint by more than max_step (cause
     2); returns (first target not followed, cause), (last, 0) when all were. One kernel does
     both so that the first call compiles the solver once.
     """
     lower, upper, turn, sample_lo, sample_hi = limits
-    max_iter, restarts, method, seed, follow, max_step = budget
+    max_iter, restarts, method, seed, follow, max_step, polish = budget
     n, m = starts.shape[2], task[1].shape[0]
     k = max(min(m, n), 1)                               # scratch for _descend
     poses, jacobians, residuals = np.empty((3, 4, 4)), np.empty((2, 6, n)), np.empty((2, m))
@@ -301,7 +301,7 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
             if ok:
                 done = True
                 break
-        if not done:
+        if not done and (polish or follow):
             # Near a singularity convergence slows down: an attempt may end (or be judged
             # stalled) close to a solution it had no time to reach. Give the best point a long
             # last run. (Following: the one run, from the previous solution.)
@@ -338,6 +338,9 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
 # --- the Python side --------------------------------------------------------------------------
 
 def _read_only(a) -> np.ndarray:
+    """a as a C-contiguous read-only array (a copy only if needed)."""
+    if isinstance(a, np.ndarray) and a.flags.c_contiguous and not a.flags.writeable:
+        return a
     a = np.array(a)
     a.setflags(write=False)
     return a
@@ -379,8 +382,10 @@ def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tup
 
 
 def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task: tuple,
-          method: str, max_iter: int, restarts: int, seed: int, threads: int | None = None):
-    """Numeric IK for targets (N, 4, 4), trying starts (N, S, n) first, then random ones.
+          method: str, max_iter: int, restarts: int, seed: int, threads: int | None = None,
+          polish: bool = True):
+    """Numeric IK for targets (N, 4, 4), trying starts (N, S, n) first, then random ones,
+    then (with `polish`) a long run from the best point found.
 
     Returns
     -------
@@ -399,7 +404,8 @@ def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task
     errors = np.empty((N, 2))
     args = (_writable(targets), _writable(starts), kernel_args.chain,
             kernel_args.limits, task, (int(max_iter), int(restarts), METHOD_CODES[method],
-                                       int(seed), 0, 0.0), q, converged, iterations, errors)
+                                       int(seed), 0, 0.0, int(polish)), q, converged,
+            iterations, errors)
     workers = thread_count(N, threads)
     if workers == 1:
         solve_targets(0, N, *args)
@@ -421,6 +427,6 @@ def track(kernel_args: KernelArgs, targets: np.ndarray, q_start: np.ndarray, tas
     starts = _writable(np.broadcast_to(q_start, (K, 1, n)))
     followed, cause = solve_targets(
         0, K, _writable(targets), starts, kernel_args.chain, kernel_args.limits, task,
-        (int(max_iter), 0, LM, 0, 1, float(max_step)), q, np.zeros(K, dtype=np.bool_),
+        (int(max_iter), 0, LM, 0, 1, float(max_step), 0), q, np.zeros(K, dtype=np.bool_),
         np.zeros(K, dtype=np.int64), np.empty((K, 2)))
     return q[:followed], int(followed), int(cause)

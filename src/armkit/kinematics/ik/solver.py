@@ -146,6 +146,29 @@ class IKTrack:
         return {name: _plain(getattr(self, name)) for name in self.__dataclass_fields__}
 
 
+def _pose_fast(target) -> NDArray | None:
+    """One pose (4, 4) checked in plain Python (for 16 numbers several times cheaper than the
+    NumPy checks of `as_transform`, with the same tolerance); None if it is not one valid pose,
+    and the caller lets `as_transform` say why."""
+    try:
+        T = np.array(target, dtype=float)
+    except (TypeError, ValueError):
+        return None
+    if T.shape != (4, 4):
+        return None
+    v = T.ravel().tolist()
+    if not all(map(math.isfinite, v)):
+        return None
+    r0, r1, r2 = v[0:3], v[4:7], v[8:11]
+    dot = lambda a, b: a[0] * b[0] + a[1] * b[1] + a[2] * b[2]      # noqa: E731
+    off = max(abs(dot(r0, r0) - 1.0), abs(dot(r1, r1) - 1.0), abs(dot(r2, r2) - 1.0),
+              abs(dot(r0, r1)), abs(dot(r0, r2)), abs(dot(r1, r2)))
+    det = (r0[0] * (r1[1] * r2[2] - r1[2] * r2[1]) - r0[1] * (r1[0] * r2[2] - r1[2] * r2[0])
+           + r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]))
+    last = max(abs(v[12]), abs(v[13]), abs(v[14]), abs(v[15] - 1.0))
+    return T if off <= 1e-6 and det > 0 and last <= 1e-6 else None
+
+
 def reach_bound(robot: Robot) -> float:
     """An upper bound (m) on the distance from joint 1's axis point (``chain.points[0]``) to
     the tool point.
@@ -160,10 +183,13 @@ def reach_bound(robot: Robot) -> float:
     return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)) + strokes.sum())
 
 
-def default_mask(robot: Robot, family: analytic.Family | None = None) -> NDArray:
+_UNKNOWN = object()
+
+
+def default_mask(robot: Robot, family=_UNKNOWN) -> NDArray:
     """The task a robot can do exactly: a closed form's own task, a full pose for six or more
-    joints, else the position."""
-    family = family or analytic.family_of(robot.chain)
+    joints, else the position. `family`: the chain's closed-form family if already known."""
+    family = analytic.family_of(robot.chain) if family is _UNKNOWN else family
     if family is not None:
         return np.array(family.mask, dtype=bool)
     return as_mask("pose" if robot.n >= 6 else "position")
@@ -318,12 +344,67 @@ class IKSolver:
         InputError
             Bad shapes or values of the arguments (never for an unreachable target).
         """
+        T = _pose_fast(targets)
+        if T is not None and (q0 is None or np.shape(q0) == (self.robot.n,)):
+            task_mask = self.default_mask if mask is None else as_mask(mask)
+            if self._family_for(task_mask, method) is None:
+                return self._solve_one(T, q0, task_mask, method, criterion, weights,
+                                       tol_position, tol_rotation, max_iter, restarts, seed,
+                                       seeds)
         request = self._validate(targets, q0, mask, method, criterion, weights, tol_position,
                                  tol_rotation, max_iter, restarts, seed, seeds)
         beyond = self._beyond(request.T)
         state = self._closed_form(request, beyond)
         self._numeric(request, beyond, state)
         return self._verdict(request, beyond, state)
+
+    def _solve_one(self, T, q0, mask, method, criterion, weights, tol_position, tol_rotation,
+                   max_iter, restarts, seed, seeds) -> IKResult:
+        """One target, numeric only: the batch path's steps without its batch work (the same
+        starts, kernel and verdict, so the same result as that target in a batch). From a
+        given q0 the seed bank is searched only if q0 alone does not converge."""
+        self._check_options(method, criterion, weights, tol_position, tol_rotation, max_iter,
+                            restarts, seed)
+        n = self.robot.n
+        if q0 is not None:
+            q0 = joint_array(self.robot, q0, "q0")
+        p = T[:3, 3] - self.robot.chain.points[0]
+        beyond = math.sqrt(float(p @ p)) > self.reach * (1 + 1e-9)
+        label = method if method in ("lm", "newton") else "lm"
+        task = numeric.task_args(mask, tol_position, tol_rotation)
+        targets = T[None]
+        q, converged = np.empty((1, n)), np.zeros(1, dtype=np.bool_)
+        iterations, errors = np.zeros(1, dtype=np.int64), np.empty((1, 2))
+        budget = (int(max_iter), 0, numeric.METHOD_CODES[label], int(seed), 0, 0.0, 0)
+        chain, limits = self._kernel.chain, self._kernel.limits
+        if q0 is not None and not beyond:
+            numeric.solve_targets(0, 1, targets, np.array(q0.reshape(1, 1, n)), chain, limits,
+                                  task, budget, q, converged, iterations, errors)
+        if not converged[0]:
+            bank = self.bank if seeds else None
+            first = q0 if q0 is not None else None
+            if bank is not None:
+                starts = bank.starts(targets, mask, SEEDS)
+                if first is not None:
+                    starts[0, 1:] = starts[0, :-1].copy()
+                    starts[0, 0] = first
+            else:
+                starts = np.array((first if first is not None else self._mid).reshape(1, 1, n))
+            budget = (int(max_iter), 0 if beyond else int(restarts),
+                      numeric.METHOD_CODES[label], int(seed), 0, 0.0, 1)
+            numeric.solve_targets(0, 1, targets, starts, chain, limits, task, budget, q,
+                                  converged, iterations, errors)
+        pe, re = float(errors[0, 0]), float(errors[0, 1])
+        success = pe < tol_position and re < tol_rotation
+        if success:
+            reason = OK
+        elif beyond:
+            reason = OUT_OF_REACH
+        else:
+            reason = str(self._numeric_reasons(q, np.zeros(1, bool), mask, int(max_iter),
+                                               int(restarts))[0])
+        return IKResult(success, q[0], pe, re, int(iterations[0]), reason, label, criterion,
+                        mask_name(mask))
 
     def _validate(self, targets, q0, mask, method, criterion, weights, tol_position,
                   tol_rotation, max_iter, restarts, seed, seeds) -> _Request:
@@ -342,6 +423,17 @@ class IKSolver:
                 raise InputError(f"q0: expected shape (..., {robot.n}) matching the targets' "
                                  f"{lead}, found {q0.shape}") from None
         mask = self.default_mask if mask is None else as_mask(mask)
+        weights = self._check_options(method, criterion, weights, tol_position, tol_rotation,
+                                      max_iter, restarts, seed)
+        family = self._family_for(mask, method)
+        return _Request(flat_T, lead, q_ref, q0 is not None, mask, family, method, criterion,
+                        weights, float(tol_position), float(tol_rotation), int(max_iter),
+                        int(restarts), int(seed), bool(seeds))
+
+    def _check_options(self, method, criterion, weights, tol_position, tol_rotation, max_iter,
+                       restarts, seed):
+        """Check the scalar options of a solve; returns the weights as an array (or None)."""
+        robot = self.robot
         if method not in METHODS:
             raise InputError(f"method: expected one of {', '.join(METHODS)}, found {method!r}")
         if criterion not in CRITERIA:
@@ -360,22 +452,23 @@ class IKSolver:
         if max_iter < 1 or restarts < 0:
             raise InputError(f"max_iter, restarts: expected >= 1 and >= 0, found {max_iter}, "
                              f"{restarts}")
-        family = self.family
+        return weights
+
+    def _family_for(self, mask: NDArray, method: str) -> analytic.Family | None:
+        """The closed form that serves this task and method, or None (numeric only)."""
+        robot, family = self.robot, self.family
         if method == "analytic" and family is None:
             raise InputError(f"method: expected 'auto', 'lm' or 'newton' for {robot.name}, "
                              f"found 'analytic' (its geometry has no closed form here)")
         # A closed form solves its own task; a looser task (fewer flags) is the numeric solver's.
-        if family is not None and not np.all(mask >= np.array(family.mask, dtype=bool)):
+        if family is not None and not all(m or not f for m, f in zip(mask.tolist(),
+                                                                      family.mask)):
             if method == "analytic":
                 raise InputError(f"mask: expected one that includes "
                                  f"{mask_name(np.array(family.mask, bool))} for the closed "
                                  f"form of {robot.name}, found {mask_name(mask)}")
             family = None
-        if method in ("lm", "newton"):
-            family = None
-        return _Request(flat_T, lead, q_ref, q0 is not None, mask, family, method, criterion,
-                        weights, float(tol_position), float(tol_rotation), int(max_iter),
-                        int(restarts), int(seed), bool(seeds))
+        return None if method in ("lm", "newton") else family
 
     def _beyond(self, T: NDArray) -> NDArray:
         """(N,) Targets past the reach bound: no configuration reaches them."""
