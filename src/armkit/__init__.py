@@ -25,7 +25,8 @@ _HOMES = {
     **dict.fromkeys(("jacobian", "jacobian_analytic", "jacobian_dot", "tool_velocity",
                      "tool_acceleration", "singular_values", "manipulability",
                      "min_singular_value", "condition_number"), "armkit.kinematics.jacobian"),
-    **dict.fromkeys(("ik", "ik_solutions", "IKResult", "IKSolutions"), "armkit.kinematics.ik"),
+    **dict.fromkeys(("ik", "ik_solutions", "IKResult", "IKSolutions", "IKSolver", "IKTrack"),
+                    "armkit.kinematics.ik"),
     **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.model.files"),
     "Robot": "armkit.model.robot",
     **dict.fromkeys(("Trajectory", "cubic", "quintic", "jerk_limited", "trapezoidal", "retime",
@@ -50,7 +51,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.io.camera import read_camera_mount
     from armkit.perception import TargetResult, detect_target
     from armkit.kinematics.forward import fk, fk_frames
-    from armkit.kinematics.ik import IKResult, IKSolutions, ik, ik_solutions
+    from armkit.kinematics.ik import IKResult, IKSolutions, IKSolver, IKTrack, ik, ik_solutions
     from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,
                                             jacobian_dot, manipulability, min_singular_value,
                                             singular_values, tool_acceleration, tool_velocity)

@@ -70,7 +70,6 @@ def test_unreachable_target_exits_1_with_its_reason():
      "--rpy, --yaw: expected one of them, found 2"),
     (("ur5", "--pose", "0.3", "0", "0.3", "--q0", "1 2 x"), "--q0: expected 6 numbers"),
     (("ur5", "--pose", "0.3", "0", "0.3", "--mask", "everything"), "mask: expected one of"),
-    (("panda", "--pose", "0.3", "0", "0.3", "--all"), "only the numeric solvers serve"),
 ])
 def test_bad_input_exits_2(args, words):
     result = run(*args)

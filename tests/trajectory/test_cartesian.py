@@ -1,5 +1,5 @@
 """Straight-line tool motion: on the line to 1e-9 m where the arm can follow it, and an honest
-stop (out of reach, joint limits, singularity) where it cannot."""
+stop (out of reach, outside joint limits, singular) where it cannot."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 import armkit
 from armkit.errors import InputError
+from armkit.kinematics.ik.reasons import OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR
 from armkit.spatial import rotation_angle, rotz, transform
 from armkit.trajectory.cartesian import cartesian_line, line_poses
 
@@ -29,7 +30,7 @@ def test_the_tool_stays_on_the_line_as_far_as_it_follows_it(dx, dy, dz, turn):
     T0 = armkit.fk(UR5, Q0)
     T1 = transform(T0[:3, :3] @ rotz(turn), T0[:3, 3] + [dx, dy, dz])
     path = cartesian_line(UR5, T0, T1, Q0)
-    assert path.success or path.reason in ("out of reach", "joint limits", "singularity")
+    assert path.success or path.reason in (OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR)
     assert path.success == (path.stop == 1.0) == (len(path.q) == len(path.s))
     reached = armkit.fk(UR5, path.q)
     np.testing.assert_allclose(reached, path.poses[:len(path.q)], atol=1e-9)
@@ -73,7 +74,7 @@ def test_leaving_the_workspace_stops_with_out_of_reach():
     T1 = T0.copy()
     T1[:3, 3] += [1.5, 0.0, 0.0]
     path = cartesian_line(UR5, T0, T1, Q0)
-    assert not path.success and path.reason == "out of reach" and 0 < path.stop < 1
+    assert not path.success and path.reason == OUT_OF_REACH and 0 < path.stop < 1
     assert len(path.q) < len(path.s)
     np.testing.assert_allclose(armkit.fk(UR5, path.q), path.poses[:len(path.q)], atol=1e-9)
 
@@ -85,14 +86,14 @@ def test_a_joint_limit_stops_the_lift():
     T1 = T0.copy()
     T1[2, 3] += 1.0                                          # the lift's stroke ends at 0.6 m
     path = cartesian_line(robot, T0, T1, q0)
-    assert not path.success and path.reason == "joint limits"
+    assert not path.success and path.reason == OUTSIDE_JOINT_LIMITS
     assert path.stop == pytest.approx(0.5, abs=0.01)
 
 
 def test_through_the_wrist_singularity_is_reported_not_jumped():
     qa, qb = np.deg2rad([0, -90, 90, -90, 20, 0]), np.deg2rad([0, -90, 90, -90, -20, 0])
     path = cartesian_line(UR5, armkit.fk(UR5, qa), armkit.fk(UR5, qb), qa)
-    assert not path.success and path.reason == "singularity"
+    assert not path.success and path.reason == SINGULAR
     assert armkit.min_singular_value(UR5, path.q[-1]) < 0.05
     assert np.abs(np.diff(path.q, axis=0)).max() < 0.35
 

@@ -13,7 +13,7 @@ from armkit.cli.app import EXIT_FAILED, JsonFlag, SiFlag, app, print_json, stdou
 from armkit.cli.robots import RobotArg
 from armkit.cli.values import load_robot, number, parse_numbers
 from armkit.errors import InputError
-from armkit.kinematics.ik import CRITERIA, METHODS, NAMED_MASKS, ik, ik_solutions
+from armkit.kinematics.ik import CRITERIA, METHODS, NAMED_MASKS, IKSolver
 from armkit.model import SI
 from armkit.spatial import pose_from_xyz_rpy
 
@@ -43,7 +43,7 @@ def ik_command(
         "--q0", help="Current configuration, file units, spaces or commas between the values, "
                      "e.g. '0 -90 90 0 0 0'.")] = None,
     all_solutions: Annotated[bool, typer.Option(
-        "--all", help="List every closed-form solution.")] = False,
+        "--all", help="List every closed-form solution (an arm without one: says so).")] = False,
     mask: Annotated[Optional[str], typer.Option(
         "--mask", help=f"Task: {', '.join(NAMED_MASKS)} (default: from --rpy/--yaw).")] = None,
     method: Annotated[str, typer.Option(help=f"One of {', '.join(METHODS)}.")] = "auto",
@@ -64,8 +64,12 @@ def ik_command(
     if mask is None and rpy is None and pitch is None:
         mask = "position+yaw" if yaw is not None else "position"
     start = None if q0 is None else model.q_to_si(parse_numbers("--q0", q0, model.n))
-    result = ik(model, T, start, mask=mask, method=method, criterion=criterion)
-    solutions = ik_solutions(model, T, mask=mask) if all_solutions else None
+    solver = IKSolver(model)
+    result = solver.solve(T, start, mask=mask, method=method, criterion=criterion)
+    # An arm without a closed form has no list of solutions: --all then shows the numeric one
+    # and says so, rather than refusing the request.
+    solutions = (solver.solutions(T, mask=mask)
+                 if all_solutions and solver.family is not None else None)
     out = SI if si else model.units
     as_q = (lambda q: q) if si else model.q_from_si
     doc = {"robot": model.name, "units": {"length": out.length, "angle": out.angle},
@@ -75,14 +79,15 @@ def ik_command(
            "q": as_q(result.q), "position_error": out.length_from_si(result.position_error),
            "rotation_error": out.angle_from_si(result.rotation_error),
            "method": str(result.method), "iterations": result.iterations,
-           "criterion": result.criterion}
+           "criterion": result.criterion,
+           "closed_form": solver.family.name if solver.family is not None else None}
     if solutions is not None:
         doc["solutions"] = [{"q": as_q(q), "within_limits": bool(ok)}
                             for q, ok in zip(solutions.q, solutions.within_limits)]
     if as_json:
         print_json(doc)
     else:
-        _show(model, doc, solutions is not None)
+        _show(model, doc, all_solutions)
     if not result.success:
         raise typer.Exit(EXIT_FAILED)
 
@@ -90,7 +95,10 @@ def ik_command(
 def _show(model, doc: dict, listed: bool) -> None:
     units = doc["units"]
     names = model.joint_names
-    if listed and not doc["solutions"]:
+    if listed and doc["closed_form"] is None:
+        stdout.print(f"closed form: none for {model.name} (its geometry has none); the numeric "
+                     f"solution follows")
+    elif listed and not doc["solutions"]:
         stdout.print("closed form: no solution reaches the target")
     elif listed:
         table = Table(*names, "within limits", title=f"closed-form solutions ({units['angle']}, "

@@ -7,24 +7,26 @@ sample's solution, with no restart (a restart could land on another branch: a ju
 ends early, with its reason, at the first sample that
 
 - is not solved within the tolerances from the previous one: the line leaves the workspace
-  ("out of reach": full IK finds no configuration either), a joint limit stops it, or the pose
-  is reachable only on another branch ("singularity");
+  ("out of reach": full IK finds no configuration either), a joint limit stops it ("outside
+  joint limits"), or the pose is reachable only on another branch ("singular");
 - needs a joint step far larger than the Cartesian step explains: the arm passes near a
-  singularity, where joint speeds grow without bound ("singularity").
+  singularity, where joint speeds grow without bound ("singular").
+
+The reasons are those of `armkit.kinematics.ik.reasons`; the following is
+`IKSolver.track`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics.forward import fk
-from armkit.kinematics.ik import default_mask, ik
-from armkit.kinematics.ik.numeric import LM, _bounded, _descend, workspace
+from armkit.kinematics.ik import IKSolver
+from armkit.kinematics.ik.reasons import OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR
 from armkit.kinematics.ik.task import as_mask, mask_name, task_errors
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform, exp_so3, log_so3, rotation_angle
@@ -47,8 +49,9 @@ class CartesianPath:
     success : bool
         The whole line was followed.
     reason : str
-        "ok", "out of reach" (no configuration reaches the next pose), "joint limits", or
-        "singularity" (the next pose needs another branch: the arm would jump).
+        "ok", "out of reach" (no configuration reaches the next pose), "outside joint limits"
+        (a joint limit stops the line), or "singular" (the next pose needs another branch:
+        the arm would jump).
     stop : float
         Path parameter (0..1) of the last sample followed: 1.0 exactly on success; 0.0 when
         only the start was followed, or not even the start (then q has no row).
@@ -76,36 +79,6 @@ def line_poses(T_start: ArrayLike, T_goal: ArrayLike, s: ArrayLike) -> NDArray:
     out[..., :3, 3] = T0[:3, 3] + s[..., None] * (T1[:3, 3] - T0[:3, 3])
     out[..., 3, 3] = 1.0
     return out
-
-
-@numba.njit(cache=True, nogil=True)
-def _track(targets, q0, kinds, offsets, pre, links, lower, upper, turn, mask, rows, tol_p, tol_r,
-           max_iter, max_step, q_out):
-    """Follow targets (K, 4, 4) from q0; q_out (K, n). Returns (samples followed, cause):
-    cause 0 all followed, 1 a sample not solved, 2 a joint step over max_step."""
-    n = q0.shape[0]
-    ws = workspace(n, rows.shape[0])
-    q, dq = np.empty(n), np.zeros(n)
-    for j in range(n):
-        q[j] = q0[j]
-    _bounded(q, dq, lower, upper, turn, q)
-    for k in range(targets.shape[0]):
-        previous = q.copy()
-        ok, _, _ = _descend(q, targets[k], kinds, offsets, pre, links, lower, upper, turn, mask,
-                            rows, tol_p, tol_r, max_iter, LM, False, ws)
-        if not ok:
-            return k, 1
-        step = 0.0
-        for j in range(n):
-            d = q[j] - previous[j]
-            if turn[j]:                  # a wrapping joint: the short way round
-                d = (d + np.pi) % (2.0 * np.pi) - np.pi
-            step = max(step, abs(d))
-        if k > 0 and step > max_step:
-            return k, 2
-        for j in range(n):
-            q_out[k, j] = q[j]
-    return targets.shape[0], 0
 
 
 def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: ArrayLike, *,
@@ -160,38 +133,34 @@ def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: Arra
                         ("max_joint_step", max_joint_step)):
         if not value > 0:
             raise InputError(f"{name}: expected a positive step, found {value}")
-    mask = default_mask(robot) if mask is None else as_mask(mask)
+    solver = IKSolver(robot, samples=0)
+    mask = solver.default_mask if mask is None else as_mask(mask)
     length = np.linalg.norm(T1[:3, 3] - T0[:3, 3])
     turn_angle = float(rotation_angle(T0[:3, :3].T @ T1[:3, :3]))
     K = int(max(np.ceil(length / step), np.ceil(turn_angle / angle_step), 1)) + 1
     s = np.linspace(0.0, 1.0, K)
     poses = line_poses(T0, T1, s)
-    chain, k = robot.chain, robot.chain.kernel
-    turn = chain.revolute & (chain.upper - chain.lower >= 2 * np.pi - 1e-12)
-    lower = np.where(turn & ~np.isfinite(chain.lower), -np.pi, chain.lower)
-    q = np.empty((K, robot.n))
-    followed, cause = _track(poses, q0, k.kinds, k.offsets, k.pre, k.links, lower, chain.upper,
-                             turn, mask.astype(np.int64), np.flatnonzero(mask).astype(np.int64),
-                             float(tol_position), float(tol_rotation), int(max_iter),
-                             float(max_joint_step), q)
-    q = q[:followed]
-    pe, re = task_errors(fk(robot, q), poses[:followed], mask)
-    if cause == 0:
-        reason = "ok"
-    elif cause == 2:
-        reason = "singularity"
+    followed = solver.track(poses, q0, mask=mask, tol_position=tol_position,
+                            tol_rotation=tol_rotation, max_iter=max_iter,
+                            max_joint_step=max_joint_step)
+    q, k = followed.q, followed.followed
+    pe, re = task_errors(fk(robot, q), poses[:k], mask)
+    if followed.success or followed.reason == SINGULAR:
+        reason = followed.reason
     else:
         # Not solved from the previous sample: ask full IK (every branch, restarts) whether the
         # pose can be reached at all. If it can, the line needs another branch here: the arm
         # would have to jump across a singularity, or a joint limit is in the way.
-        whole = ik(robot, poses[followed], q[-1] if followed else q0, mask=mask,
-                   tol_position=tol_position, tol_rotation=tol_rotation)
-        if whole.reason in ("out of reach", "outside joint limits"):
-            reason = "out of reach" if whole.reason == "out of reach" else "joint limits"
+        last = q[-1] if k else q0
+        whole = solver.solve(poses[k], last, mask=mask, tol_position=tol_position,
+                             tol_rotation=tol_rotation)
+        if whole.reason in (OUT_OF_REACH, OUTSIDE_JOINT_LIMITS):
+            reason = whole.reason
         else:
-            last = q[-1] if followed else q0
+            chain = robot.chain
+            turn = chain.revolute & (chain.upper - chain.lower >= 2 * np.pi - 1e-12)
             at_limit = np.any(~turn & ((last <= chain.lower + 1e-9)
                                        | (last >= chain.upper - 1e-9)))
-            reason = "joint limits" if at_limit else "singularity"
-    return CartesianPath(s, poses, q, pe, re, cause == 0, reason,
-                         float(s[followed - 1]) if followed else 0.0, mask_name(mask))
+            reason = OUTSIDE_JOINT_LIMITS if at_limit else SINGULAR
+    return CartesianPath(s, poses, q, pe, re, followed.success, reason,
+                         float(s[k - 1]) if k else 0.0, mask_name(mask))

@@ -22,7 +22,6 @@ are checked by forward kinematics elsewhere (``armkit.ik``): nothing here decide
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -346,11 +345,10 @@ def _rotation_flags(k: int, pointing: bool) -> tuple[int, ...]:
     return (1, 1, 1, *flags)
 
 
-@functools.lru_cache(maxsize=64)
 def family_of(chain: Chain) -> Family | None:
     """The closed-form family of a chain, or None (then only the numeric solvers apply).
 
-    Kept per chain (chains are immutable), as every IK call asks.
+    `armkit.kinematics.ik.IKSolver` asks once and keeps the answer.
     """
     w, r = _axes(chain)
     n, rev = chain.n, chain.revolute

@@ -1,50 +1,77 @@
 """Numeric inverse kinematics for any chain: Newton-Raphson and Levenberg-Marquardt.
 
-Each target is solved by its own iterations inside one numba kernel, and the targets run in
-parallel (``prange``): a batch never loops in Python. Per iteration: tool pose and Jacobian
-(one kernel pass), the task residual ``e = (p_target - p, log(R^T R_target))`` (position in the
-base frame, rotation about the tool's axes) restricted to the mask's rows, and the step
+Each target is solved by its own iterations inside one numba kernel (``solve_targets``); a
+large batch is split over threads (the kernels release the GIL), a small one runs on the
+calling thread. Per iteration: tool pose and Jacobian (one kernel pass), the task residual and
+its Jacobian (`armkit.kinematics.ik.task.task_residual`), and the step
 
 - ``newton`` (the inspection-robot paper's method): the least-norm solution of ``A dq = e``,
   taken whole; done when the pose is within the tolerances, stuck when no step is left
   (below 1e-15);
-- ``lm`` (Levenberg-Marquardt): ``(A^T A + lambda I) dq = A^T e``, kept only if it lowers
-  ``|e|^2``, with lambda divided by 10 after a kept step and multiplied by 10 after a refused one.
+- ``lm`` (Levenberg-Marquardt): ``(A^T A + lambda I) dq = A^T e``, or in the task space
+  ``dq = A^T (A A^T + lambda I)^-1 e`` when the task has fewer rows than the arm has joints
+  (the damped minimum-norm step: a redundant task leaves the null space free), kept only if it
+  lowers ``|e|^2``, with lambda divided by 10 after a kept step and multiplied by 10 after a
+  refused one.
 
 Joint limits: a revolute joint whose range spans a full turn wraps (its angle is taken modulo
 2 pi into the range); any other joint that a step would push past a limit is held there and the
 step is taken with the others (a bound-constrained Gauss-Newton step). An attempt that has not
 reached the tolerances after ``max_iter`` iterations, whose lambda grows past 1e8, or that
 stalls (after six iterations, three more have not cut the squared residual to a quarter: it has
-settled in a local minimum, as the nearest start of about one ur5 target in ten does) starts
-again: from the next of the given starts, then from configurations drawn uniformly inside the
-limits (a splitmix64 stream per target, seeded from ``seed`` and the target's index, so results
-do not depend on thread scheduling). If every attempt fails, the best point found gets one
-last run of ten times ``max_iter`` (near a singularity convergence is slow, not absent).
+settled in a local minimum) starts again: from the next of the given starts, then from
+configurations drawn uniformly inside the limits (a splitmix64 stream per target, seeded from
+``seed`` and the target's index, so results do not depend on threads). If every attempt fails,
+the best point found gets one last run of ten times ``max_iter`` (near a singularity
+convergence is slow, not absent).
+
+The kernels take their arguments in groups (plain tuples, see `KernelArgs`):
+``chain = (kinds, offsets, pre, links)``, ``limits = (lower, upper, turn, sample_lo,
+sample_hi)``, ``task = (mask, rows, tol_position, tol_rotation)`` and
+``budget = (max_iter, restarts, method, seed)``.
 """
 
 from __future__ import annotations
 
-import functools
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numba
 import numpy as np
 
 from armkit.kinematics._kernels import pose_jacobian_one
-from armkit.kinematics.forward import fk
-from armkit.kinematics.ik.task import task_errors_one
+from armkit.kinematics.ik.task import task_errors_one, task_residual
 
-_jit = numba.njit(cache=True, nogil=True)
-_pjit = numba.njit(cache=True, nogil=True, parallel=True)
-# Reassociation lets LLVM vectorise the small dense algebra; a step only proposes q, which
-# exact forward kinematics then judges, so the last bits of a step do not matter.
-_fast = numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract", "arcp", "nsz"})
+# error_model="numpy": no exception paths for a division by zero (smaller code, faster
+# compiles); the kernels guard their divisions themselves.
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 NEWTON, LM = 0, 1
+METHOD_CODES = {"newton": NEWTON, "lm": LM}
 MAX_LAMBDA = 1e8
 STALL_AFTER, STALL_WINDOW, STALL_FACTOR = 6, 3, 0.25
+TARGETS_PER_THREAD = 256    # below this many targets per thread, threads cost more than they save
 
+
+def available_threads() -> int:
+    """CPU cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                              # not on Linux
+        return os.cpu_count() or 1
+
+
+def thread_count(targets: int, threads: int | None = None) -> int:
+    """Threads for a batch of `targets`: at most `threads` (default: the cores this process
+    may use), and one per `TARGETS_PER_THREAD` targets, so a small batch runs on the calling
+    thread and pays no start-up."""
+    limit = available_threads() if threads is None else threads
+    return max(1, min(limit, targets // TARGETS_PER_THREAD))
+
+
+# --- kernels ----------------------------------------------------------------------------------
 
 @_jit
 def _random(state):
@@ -58,152 +85,82 @@ def _random(state):
 
 
 @_jit
-def _log_rotation(E, out):
-    """Rotation vector (3,) of the rotation E (3, 3) into out; accurate near 0 and pi."""
-    sx, sy, sz = E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]
-    s = 0.5 * math.sqrt(sx * sx + sy * sy + sz * sz)
-    c = 0.5 * (E[0, 0] + E[1, 1] + E[2, 2] - 1.0)
-    angle = math.atan2(s, c)
-    if angle < 1e-6:
-        f = 0.5 * (1.0 + angle * angle / 6.0)           # angle / (2 sin angle), series
-        out[0], out[1], out[2] = f * sx, f * sy, f * sz
-    elif angle < math.pi - 1e-6:
-        f = angle / (2.0 * s)
-        out[0], out[1], out[2] = f * sx, f * sy, f * sz
-    else:
-        # Near pi the skew part vanishes: take the axis from the diagonal of (E + I) / 2.
-        k = 0
-        if E[1, 1] > E[k, k]:
-            k = 1
-        if E[2, 2] > E[k, k]:
-            k = 2
-        v0, v1, v2 = E[0, k], E[1, k], E[2, k]
-        if k == 0:
-            v0 += 1.0
-        elif k == 1:
-            v1 += 1.0
-        else:
-            v2 += 1.0
-        norm = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-        sign = 1.0 if (v0 * sx + v1 * sy + v2 * sz) >= 0.0 else -1.0
-        f = sign * angle / norm
-        out[0], out[1], out[2] = f * v0, f * v1, f * v2
-
-
-@_jit
-def _residual(T, J, Tt, rows, e, A, E, w):
-    """Masked residual e (m,) and its Jacobian A (m, n) at tool pose T with Jacobian J."""
-    for r in range(3):
-        for c in range(3):
-            E[r, c] = T[0, r] * Tt[0, c] + T[1, r] * Tt[1, c] + T[2, r] * Tt[2, c]
-    _log_rotation(E, w)
-    n = J.shape[1]
-    for i in range(rows.shape[0]):
-        r = rows[i]
-        if r < 3:
-            e[i] = Tt[r, 3] - T[r, 3]
-            for j in range(n):
-                A[i, j] = J[r, j]
-        else:
-            k = r - 3
-            e[i] = w[k]
-            for j in range(n):                          # R^T J_w: about the tool's axes
-                A[i, j] = T[0, k] * J[3, j] + T[1, k] * J[4, j] + T[2, k] * J[5, j]
-    cost = 0.0
-    for i in range(rows.shape[0]):
-        cost += e[i] * e[i]
-    return cost
-
-
-@_fast
-def _solve_spd(H, g, x):
-    """Solve H x = g for a symmetric positive definite H (k, k) by Cholesky, in place on H."""
-    k = H.shape[0]
-    for j in range(k):
-        s = H[j, j]
-        for m in range(j):
-            s -= H[j, m] * H[j, m]
-        if s <= 0.0:
-            return False
-        d = math.sqrt(s)
-        H[j, j] = d
-        for i in range(j + 1, k):
-            s = H[i, j]
-            for m in range(j):
-                s -= H[i, m] * H[j, m]
-            H[i, j] = s / d
-    for i in range(k):
-        s = g[i]
-        for m in range(i):
-            s -= H[i, m] * x[m]
-        x[i] = s / H[i, i]
-    for i in range(k - 1, -1, -1):
-        s = x[i]
-        for m in range(i + 1, k):
-            s -= H[m, i] * x[m]
-        x[i] = s / H[i, i]
-    return True
-
-
-@_fast
-def _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
-    """dq from the damped normal equations, in the smaller of the joint or task space.
+def _step(A, e, lam, free, dq, H, g, y):
+    """dq (n,) from the damped normal equations, in the smaller of the joint or task space;
+    False if the system is not positive definite.
 
     Joints with ``free[j] == False`` are held (their column left out); lam is relative to the
-    largest diagonal entry of ``A^T A``, so prismatic (m) and revolute (rad) joints damp alike.
+    largest squared column norm of A, so prismatic (m) and revolute (rad) joints damp alike.
+    H (k, k), g (k,) and y (k,) are scratch, k = min(m, n).
     """
     m, n = A.shape
-    if n <= m:                                          # (A^T A + lam I) dq = A^T e
-        for i in range(n):                              # lower triangle and right-hand side
-            s = 0.0
-            for r in range(m):
-                s += A[r, i] * e[r]
-            gn[i] = s
-            for j in range(i + 1):
-                s = 0.0
-                for r in range(m):
-                    s += A[r, i] * A[r, j]
-                Hn[i, j] = s
-        scale = 0.0
-        for i in range(n):
-            if free[i]:
-                scale = max(scale, Hn[i, i])
-        damping = lam * max(scale, 1e-300)
-        for i in range(n):
-            if free[i]:
-                Hn[i, i] += damping
-            else:                                       # a held joint: dq_i = 0
-                gn[i] = 0.0
-                for j in range(n):
-                    Hn[max(i, j), min(i, j)] = 0.0
-                Hn[i, i] = 1.0
-        return _solve_spd(Hn, gn, dq)
-    scale = 0.0                                         # dq = A^T (A A^T + lam I)^-1 e
+    joint_space = n <= m
+    k = n if joint_space else m
+    scale = 0.0
     for c in range(n):
         if free[c]:
             s = 0.0
             for r in range(m):
                 s += A[r, c] * A[r, c]
             scale = max(scale, s)
-    for i in range(m):
+    damping = lam * max(scale, 1e-300)
+    # Lower triangle of H and the right-hand side g.
+    for i in range(k):
         for j in range(i + 1):
             s = 0.0
-            for c in range(n):
-                if free[c]:
-                    s += A[i, c] * A[j, c]
-            Hm[i, j] = s
-        gm[i] = e[i]
-    damping = lam * max(scale, 1e-300)
-    for i in range(m):
-        Hm[i, i] += damping
-    if not _solve_spd(Hm, gm, y):
-        return False
-    for c in range(n):
-        s = 0.0
-        if free[c]:
-            for r in range(m):
-                s += A[r, c] * y[r]
-        dq[c] = s
+            if joint_space:                             # A^T A, held joints left out
+                if free[i] and free[j]:
+                    for r in range(m):
+                        s += A[r, i] * A[r, j]
+            else:                                       # A A^T over the free joints
+                for c in range(n):
+                    if free[c]:
+                        s += A[i, c] * A[j, c]
+            H[i, j] = s
+        if joint_space:
+            s = 0.0
+            if free[i]:
+                for r in range(m):
+                    s += A[r, i] * e[r]
+            g[i] = s
+            H[i, i] += damping if free[i] else 1.0      # a held joint: dq_i = 0
+        else:
+            g[i] = e[i]
+            H[i, i] += damping
+    # Cholesky in place, then the two triangular solves.
+    for j in range(k):
+        s = H[j, j]
+        for p in range(j):
+            s -= H[j, p] * H[j, p]
+        if s <= 0.0:
+            return False
+        d = math.sqrt(s)
+        H[j, j] = d
+        for i in range(j + 1, k):
+            s = H[i, j]
+            for p in range(j):
+                s -= H[i, p] * H[j, p]
+            H[i, j] = s / d
+    for i in range(k):
+        s = g[i]
+        for p in range(i):
+            s -= H[i, p] * y[p]
+        y[i] = s / H[i, i]
+    for i in range(k - 1, -1, -1):
+        s = y[i]
+        for p in range(i + 1, k):
+            s -= H[p, i] * y[p]
+        y[i] = s / H[i, i]
+    if joint_space:
+        for c in range(n):
+            dq[c] = y[c]
+    else:
+        for c in range(n):
+            s = 0.0
+            if free[c]:
+                for r in range(m):
+                    s += A[r, c] * y[r]
+            dq[c] = s
     return True
 
 
@@ -227,31 +184,27 @@ def _bounded(q, dq, lower, upper, turn, q_new):
 
 
 @_jit
-def workspace(n, m):
-    """Scratch arrays for solve_one, allocated once per chunk of targets."""
-    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_),
-            np.empty((4, 4)), np.empty((6, n)), np.empty((4, 4)), np.empty((6, n)),
-            np.empty(m), np.empty((m, n)), np.empty(m), np.empty((m, n)),
-            np.empty((3, 3)), np.empty(3),
-            np.empty((n, n)), np.empty(n), np.empty((m, m)), np.empty(m), np.empty(m),
-            np.empty(STALL_WINDOW))
-
-
-@_jit
-def _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows, tol_p, tol_r,
-             iterations, method, stall, ws):
+def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacobians, residuals,
+             task_jacobians, joints, vectors, H, free, earlier):
     """One attempt from q (updated in place to where it ends): (converged, cost, iterations).
 
     LM only keeps steps that lower the cost, so it ends at its best point; Newton takes every
     step and stops when the step vanishes. With `stall`, an attempt that stops making progress
-    ends early.
+    ends early. The arrays after `stall` are scratch (see `solve_targets`).
     """
+    kinds, offsets, pre, links = chain
+    lower, upper, turn = limits[0], limits[1], limits[2]
+    mask, rows, tol_p, tol_r = task
     n = q.shape[0]
-    _, q_new, dq, free, T, J, T2, J2, e, A, e2, A2, E, w, Hn, gn, Hm, gm, y, earlier = ws
+    q_new, dq, g, y = joints[0], joints[1], vectors[0], vectors[1]
+    E, w = poses[2, :3, :3], poses[2, 3, :3]
+    T, T2, J, J2 = poses[0], poses[1], jacobians[0], jacobians[1]
+    e, e2, A, A2 = residuals[0], residuals[1], task_jacobians[0], task_jacobians[1]
     pose_jacobian_one(q, kinds, offsets, pre, links, T, J)
-    cost = _residual(T, J, Tt, rows, e, A, E, w)
+    cost = task_residual(T, J, Tt, mask, rows, e, A, E, w)
     lam = 1e-3 if method == LM else 1e-15
-    earlier[:] = np.inf                                 # the cost 1, 2, 3 iterations ago
+    for j in range(STALL_WINDOW):                       # the cost 1, 2, 3 iterations ago
+        earlier[j] = np.inf
     for it in range(iterations):
         ep, er = task_errors_one(T, Tt, mask)
         if ep < tol_p and er < tol_r:
@@ -261,26 +214,25 @@ def _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows, 
         earlier[it % STALL_WINDOW] = cost
         for j in range(n):
             free[j] = True
-        if not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
-            lam *= 10.0
-            if lam > MAX_LAMBDA:
-                return False, cost, it + 1
-            continue
-        # Hold the joints this step pushes past a limit, and step with the others.
-        held = False
-        for j in range(n):
-            if not turn[j] and ((q[j] <= lower[j] and dq[j] < 0.0)
-                                or (q[j] >= upper[j] and dq[j] > 0.0)):
-                free[j] = False
-                held = True
-        if held and not _step(A, e, lam, free, dq, Hn, gn, Hm, gm, y):
+        ok = _step(A, e, lam, free, dq, H, g, y)
+        if ok:
+            # Hold the joints this step pushes past a limit, and step with the others.
+            held = False
+            for j in range(n):
+                if not turn[j] and ((q[j] <= lower[j] and dq[j] < 0.0)
+                                    or (q[j] >= upper[j] and dq[j] > 0.0)):
+                    free[j] = False
+                    held = True
+            if held:
+                ok = _step(A, e, lam, free, dq, H, g, y)
+        if not ok:
             lam *= 10.0
             if lam > MAX_LAMBDA:
                 return False, cost, it + 1
             continue
         size = _bounded(q, dq, lower, upper, turn, q_new)
         pose_jacobian_one(q_new, kinds, offsets, pre, links, T2, J2)
-        new_cost = _residual(T2, J2, Tt, rows, e2, A2, E, w)
+        new_cost = task_residual(T2, J2, Tt, mask, rows, e2, A2, E, w)
         if method == NEWTON or new_cost < cost:
             for j in range(n):
                 q[j] = q_new[j]
@@ -298,73 +250,142 @@ def _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows, 
 
 
 @_jit
-def solve_one(Tt, starts, kinds, offsets, pre, links, lower, upper, turn, sample_lo, sample_hi,
-              mask, rows, tol_p, tol_r, max_iter, restarts, method, state, q_out, ws):
-    """Solve one target from starts (S, n), then random restarts, then a long polish of the
-    best point found; q_out gets the solution or that best point. Returns
-    (converged, iterations)."""
-    n = starts.shape[1]
-    q, dq = ws[0], ws[2]
-    best, total = np.inf, 0
-    for attempt in range(restarts + 1):
+def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_out, converged,
+                  iterations, errors):
+    """Solve targets[first:last] (N, 4, 4). Writes q_out (N, n), converged (N,), iterations
+    (N,) summed over attempts, and errors (N, 2): position (m) and rotation (rad) error of
+    q_out under the task, by forward kinematics. Returns (targets done, cause).
+
+    budget = (max_iter, restarts, method, seed, follow, max_step, polish). Solving (follow
+    0): each target from its starts (N, S, n), then random restarts, then (if polish) a long
+    run from its best point; returns (last, 0). Following (follow 1): target t starts from the solution of t - 1
+    (the first from starts[first, 0]), with no restart; stops at the first target not solved
+    (cause 1) or, after the first, whose solution moved a joint by more than max_step (cause
+    2); returns (first target not followed, cause), (last, 0) when all were. One kernel does
+    both so that the first call compiles the solver once.
+    """
+    lower, upper, turn, sample_lo, sample_hi = limits
+    max_iter, restarts, method, seed, follow, max_step, polish = budget
+    n, m = starts.shape[2], task[1].shape[0]
+    k = max(min(m, n), 1)                               # scratch for _descend
+    poses, jacobians, residuals = np.empty((3, 4, 4)), np.empty((2, 6, n)), np.empty((2, m))
+    task_jacobians, joints, vectors = np.empty((2, m, n)), np.empty((2, n)), np.empty((2, k))
+    H, free, earlier = np.empty((k, k)), np.empty(n, dtype=np.bool_), np.empty(STALL_WINDOW)
+    q, previous, zero = np.empty(n), np.empty(n), np.zeros(n)
+    stall, polish_stall = follow == 0, follow < 0       # run-time flags: one compiled _descend
+    if follow:
         for j in range(n):
-            if attempt < starts.shape[0]:
-                q[j] = starts[attempt, j]
-            else:
-                state, u = _random(state)
-                q[j] = sample_lo[j] + u * (sample_hi[j] - sample_lo[j])
-            dq[j] = 0.0
-        _bounded(q, dq, lower, upper, turn, q)
-        ok, cost, its = _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask,
-                                 rows, tol_p, tol_r, max_iter, method, True, ws)
-        total += its
-        if ok or cost < best:
-            best = cost
+            q[j] = starts[first, 0, j]
+        _bounded(q, zero, lower, upper, turn, q)
+    for t in range(first, last):
+        state = np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(t)
+        best, total, done = np.inf, 0, False
+        for j in range(n):
+            previous[j] = q[j]
+        for attempt in range(0 if follow else restarts + 1):
             for j in range(n):
-                q_out[j] = q[j]
-        if ok:
-            return True, total
-    # Near a singularity convergence slows down: an attempt may end (or be judged stalled)
-    # close to a solution it had no time to reach. Give the best point a long last run.
-    for j in range(n):
-        q[j] = q_out[j]
-    ok, cost, its = _descend(q, Tt, kinds, offsets, pre, links, lower, upper, turn, mask, rows,
-                             tol_p, tol_r, 10 * max_iter, method, False, ws)
-    total += its
-    if ok or cost < best:
-        for j in range(n):
-            q_out[j] = q[j]
-    return ok, total
+                if attempt < starts.shape[1]:
+                    q[j] = starts[t, attempt, j]
+                else:
+                    state, u = _random(state)
+                    q[j] = sample_lo[j] + u * (sample_hi[j] - sample_lo[j])
+            _bounded(q, zero, lower, upper, turn, q)
+            ok, cost, its = _descend(q, targets[t], chain, limits, task, method, max_iter, stall,
+                                     poses, jacobians, residuals, task_jacobians, joints,
+                                     vectors, H, free, earlier)
+            total += its
+            if ok or cost < best:
+                best = cost
+                for j in range(n):
+                    q_out[t, j] = q[j]
+            if ok:
+                done = True
+                break
+        if not done and (polish or follow):
+            # Near a singularity convergence slows down: an attempt may end (or be judged
+            # stalled) close to a solution it had no time to reach. Give the best point a long
+            # last run. (Following: the one run, from the previous solution.)
+            if not follow:
+                for j in range(n):
+                    q[j] = q_out[t, j]
+            ok, cost, its = _descend(q, targets[t], chain, limits, task, method,
+                                     max_iter if follow else 10 * max_iter, polish_stall, poses,
+                                     jacobians, residuals, task_jacobians, joints, vectors, H,
+                                     free, earlier)
+            total += its
+            if ok or cost < best or follow:
+                for j in range(n):
+                    q_out[t, j] = q[j]
+            done = ok
+        converged[t], iterations[t] = done, total
+        pose_jacobian_one(q_out[t], chain[0], chain[1], chain[2], chain[3], poses[0],
+                          jacobians[0])
+        errors[t, 0], errors[t, 1] = task_errors_one(poses[0], targets[t], task[0])
+        if follow:
+            if not done:
+                return t, 1
+            step = 0.0
+            for j in range(n):
+                d = q[j] - previous[j]
+                if turn[j]:                  # a wrapping joint: the short way round
+                    d = (d + math.pi) % (2.0 * math.pi) - math.pi
+                step = max(step, abs(d))
+            if t > first and step > max_step:
+                return t, 2
+    return last, 0
 
 
-@_jit
-def _solve_range(first, last, Tt, starts, kinds, offsets, pre, links, lower, upper, turn,
-                 sample_lo, sample_hi, mask, rows, tol_p, tol_r, max_iter, restarts, method,
-                 seed, q_out, converged, iterations):
-    ws = workspace(starts.shape[2], rows.shape[0])
-    for k in range(first, last):
-        state = np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(k)
-        converged[k], iterations[k] = solve_one(
-            Tt[k], starts[k], kinds, offsets, pre, links, lower, upper, turn, sample_lo,
-            sample_hi, mask, rows, tol_p, tol_r, max_iter, restarts, method, state, q_out[k], ws)
+# --- the Python side --------------------------------------------------------------------------
+
+def _read_only(a) -> np.ndarray:
+    """a as a C-contiguous read-only array (a copy only if needed)."""
+    if isinstance(a, np.ndarray) and a.flags.c_contiguous and not a.flags.writeable:
+        return a
+    a = np.array(a)
+    a.setflags(write=False)
+    return a
 
 
-@_pjit
-def solve_parallel(chunk, Tt, starts, kinds, offsets, pre, links, lower, upper, turn, sample_lo,
-                   sample_hi, mask, rows, tol_p, tol_r, max_iter, restarts, method, seed, q_out,
-                   converged, iterations):
-    """Targets in chunks of `chunk`, the chunks in parallel (one workspace per chunk)."""
-    N = Tt.shape[0]
-    for c in numba.prange((N + chunk - 1) // chunk):
-        _solve_range(c * chunk, min(N, (c + 1) * chunk), Tt, starts, kinds, offsets, pre, links,
-                     lower, upper, turn, sample_lo, sample_hi, mask, rows, tol_p, tol_r,
-                     max_iter, restarts, method, seed, q_out, converged, iterations)
+def _writable(a, dtype=float) -> np.ndarray:
+    """a as a C-contiguous writable array (a copy only if needed): the kernels see one type
+    whatever the caller passed, and compile once."""
+    return np.require(a, dtype=dtype, requirements=("C", "W"))
 
 
-def solve(robot, targets: np.ndarray, starts: np.ndarray, mask: np.ndarray, method: str,
-          tol_position: float, tol_rotation: float, max_iter: int, restarts: int,
-          seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Numeric IK for targets (N, 4, 4), trying starts (N, S, n) first, then random ones.
+@dataclass(frozen=True)
+class KernelArgs:
+    """A robot's arrays as the numeric kernels take them, built once per solver.
+
+    chain: (kinds, offsets, pre, links); limits: (lower, upper, turn, sample_lo, sample_hi),
+    where turn marks revolute joints whose range is a full turn or more (they wrap instead of
+    stopping) and the sample range is `Chain.sampling_limits`.
+    """
+
+    chain: tuple
+    limits: tuple
+
+    @classmethod
+    def of(cls, robot) -> "KernelArgs":
+        chain, k = robot.chain, robot.chain.kernel
+        lower, upper = chain.lower, chain.upper
+        turn = chain.revolute & (upper - lower >= 2 * np.pi - 1e-12)
+        lower_w = np.where(turn & ~np.isfinite(lower), -np.pi, lower)
+        sample_lo, sample_hi = chain.sampling_limits
+        return cls(tuple(_read_only(a) for a in (k.kinds, k.offsets, k.pre, k.links)),
+                   tuple(_read_only(a) for a in (lower_w, upper, turn, sample_lo, sample_hi)))
+
+
+def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tuple:
+    """The task group of the kernels: (mask (6,) int, rows (m,) int, tol_p, tol_r)."""
+    return (mask.astype(np.int64), np.flatnonzero(mask).astype(np.int64), float(tol_position),
+            float(tol_rotation))
+
+
+def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task: tuple,
+          method: str, max_iter: int, restarts: int, seed: int, threads: int | None = None,
+          polish: bool = True):
+    """Numeric IK for targets (N, 4, 4), trying starts (N, S, n) first, then random ones,
+    then (with `polish`) a long run from the best point found.
 
     Returns
     -------
@@ -373,160 +394,39 @@ def solve(robot, targets: np.ndarray, starts: np.ndarray, mask: np.ndarray, meth
     converged : ndarray of bool, shape (N,)
     iterations : ndarray of int, shape (N,)
         Iterations summed over all attempts.
+    errors : ndarray, shape (N, 2)
+        Position (m) and rotation (rad) error of q under the task, by forward kinematics.
     """
-    chain, k = robot.chain, robot.chain.kernel
-    lower, upper = chain.lower, chain.upper
-    # A revolute joint whose range is a full turn or more wraps instead of stopping.
-    turn = chain.revolute & (upper - lower >= 2 * np.pi - 1e-12)
-    sample_lo, sample_hi = chain.sampling_limits
-    lower_w = np.where(turn & ~np.isfinite(lower), -np.pi, lower)
-    N = targets.shape[0]
-    q = np.empty((N, robot.n))
+    N, n = targets.shape[0], starts.shape[2]
+    q = np.empty((N, n))
     converged = np.zeros(N, dtype=np.bool_)
     iterations = np.zeros(N, dtype=np.int64)
-    # Chunks small enough to share the work out evenly, large enough that a workspace per
-    # chunk costs nothing; a single chunk runs without starting threads.
-    chunk = max(8, N // (4 * numba.get_num_threads()))
-    args = (np.ascontiguousarray(targets), np.ascontiguousarray(starts), k.kinds, k.offsets,
-            k.pre, k.links, lower_w, upper, turn, sample_lo, sample_hi, mask.astype(np.int64),
-            np.flatnonzero(mask).astype(np.int64), float(tol_position), float(tol_rotation),
-            int(max_iter), int(restarts), {"newton": NEWTON, "lm": LM}[method], int(seed), q,
-            converged, iterations)
-    if N <= chunk:
-        _solve_range(0, N, *args)
+    errors = np.empty((N, 2))
+    args = (_writable(targets), _writable(starts), kernel_args.chain,
+            kernel_args.limits, task, (int(max_iter), int(restarts), METHOD_CODES[method],
+                                       int(seed), 0, 0.0, int(polish)), q, converged,
+            iterations, errors)
+    workers = thread_count(N, threads)
+    if workers == 1:
+        solve_targets(0, N, *args)
     else:
-        solve_parallel(chunk, *args)
-    return q, converged, iterations
+        # Interleaved chunks share the work out evenly; the kernel releases the GIL.
+        chunk = max(16, N // (8 * workers))
+        bounds = [(a, min(N, a + chunk)) for a in range(0, N, chunk)]
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(lambda ab: solve_targets(ab[0], ab[1], *args), bounds))
+    return q, converged, iterations, errors
 
 
-def _features(T: np.ndarray, mask: np.ndarray, length: float) -> np.ndarray:
-    """Pose features (..., d) whose distances approximate the task error: the position, and
-    the tool axes the mask constrains, times a length (m per rad)."""
-    flags = np.flatnonzero(mask[3:])
-    if flags.size == 3:
-        axes = [0, 2]                       # two axes fix an orientation
-    elif flags.size == 2:
-        axes = [3 - flags.sum()]            # the pointing axis
-    elif flags.size == 1:
-        axes = [(flags[0] + 1) % 3]         # an axis the rotation about flags[0] turns
-    else:
-        axes = []
-    return np.concatenate([T[..., :3, 3]] + [length * T[..., :3, a] for a in axes], axis=-1)
-
-
-@_jit
-def _cell(p, lo, inv, G):
-    """Grid cell (i, j, k) of the point p (3,), clipped to the G x G x G grid."""
-    return (min(max(int((p[0] - lo[0]) * inv[0]), 0), G - 1),
-            min(max(int((p[1] - lo[1]) * inv[1]), 0), G - 1),
-            min(max(int((p[2] - lo[2]) * inv[2]), 0), G - 1))
-
-
-@_jit
-def _grid(P, lo, inv, G):
-    """Points P (S, 3) sorted by grid cell: (order (S,), start (G^3 + 1,)); the points of cell
-    c are ``order[start[c]:start[c + 1]]``."""
-    S = P.shape[0]
-    cells = np.empty(S, dtype=np.int64)
-    start = np.zeros(G * G * G + 1, dtype=np.int64)
-    for s in range(S):
-        i, j, k = _cell(P[s], lo, inv, G)
-        cells[s] = (i * G + j) * G + k
-        start[cells[s] + 1] += 1
-    for c in range(G * G * G):
-        start[c + 1] += start[c]
-    fill = start[:-1].copy()
-    order = np.empty(S, dtype=np.int64)
-    for s in range(S):
-        order[fill[cells[s]]] = s
-        fill[cells[s]] += 1
-    return order, start
-
-
-@_jit
-def _nearest_one(p, f, F, lo, inv, G, order, start, best, dist):
-    """The len(best) samples nearest the features f (d,) into best, searched cell shell by cell
-    shell around the position p (3,) until enough are found."""
-    count = best.shape[0]
-    dist[:] = np.inf
-    found = 0
-    ci, cj, ck = _cell(p, lo, inv, G)
-    for r in range(G):
-        for i in range(max(ci - r, 0), min(ci + r, G - 1) + 1):
-            for j in range(max(cj - r, 0), min(cj + r, G - 1) + 1):
-                for k in range(max(ck - r, 0), min(ck + r, G - 1) + 1):
-                    if max(abs(i - ci), abs(j - cj), abs(k - ck)) != r:
-                        continue                        # scanned in an earlier shell
-                    c = (i * G + j) * G + k
-                    for a in range(start[c], start[c + 1]):
-                        s = order[a]
-                        d = 0.0
-                        for m in range(f.shape[0]):
-                            d += (F[s, m] - f[m]) ** 2
-                        if d < dist[count - 1]:         # insert into the sorted shortlist
-                            b = count - 1
-                            while b > 0 and dist[b - 1] > d:
-                                dist[b], best[b] = dist[b - 1], best[b - 1]
-                                b -= 1
-                            dist[b], best[b] = d, s
-                        found += 1
-        if found >= count and r >= 1:
-            return
-
-
-@_jit
-def _nearest(P_targets, F_targets, F, lo, inv, G, order, start, best):
-    for t in range(P_targets.shape[0]):
-        _nearest_one(P_targets[t], F_targets[t], F, lo, inv, G, order, start, best[t],
-                     np.empty(best.shape[1]))
-
-
-@_pjit
-def _nearest_parallel(P_targets, F_targets, F, lo, inv, G, order, start, best):
-    for t in numba.prange(P_targets.shape[0]):
-        _nearest_one(P_targets[t], F_targets[t], F, lo, inv, G, order, start, best[t],
-                     np.empty(best.shape[1]))
-
-
-@functools.lru_cache(maxsize=8)
-def _bank(robot, flags: tuple[bool, ...], length: float, samples: int, seed: int):
-    """A robot's seed bank for a task: configurations Q (S, n) drawn inside the limits, their
-    `_features` F (S, d), and their tool positions sorted into a grid of about S cells
-    (lo (3,), inv (3,) cells per m, G cells a side, order, start: see `_grid`).
-
-    About 1 ms for 4096 samples of a 6-DOF arm, paid on the first call for a robot, task and
-    seed; the bank is read-only after.
-    """
-    rng = np.random.default_rng([seed, 0x5EED])
-    Q = rng.uniform(*robot.chain.sampling_limits, (samples, robot.n))
-    T = fk(robot, Q)
-    P = np.ascontiguousarray(T[:, :3, 3])
-    G = max(1, round(samples ** (1 / 3)))
-    lo = P.min(axis=0)
-    inv = G / np.maximum(P.max(axis=0) - lo, 1e-12)
-    order, start = _grid(P, lo, inv, G)
-    bank = (Q, _features(T, np.array(flags), length), lo, inv, G, order, start)
-    for a in bank:
-        if isinstance(a, np.ndarray):
-            a.setflags(write=False)
-    return bank
-
-
-def seed_starts(robot, targets: np.ndarray, mask: np.ndarray, length: float, count: int = 4,
-                samples: int = 4096, seed: int = 0) -> np.ndarray:
-    """Starts (N, count, n) for targets (N, 4, 4): the joint vectors of `count` of `samples`
-    configurations drawn inside the limits (see `_bank`), those nearest the target by
-    `_features`.
-
-    Each target ranks the samples whose tool positions lie in the grid cells around its own
-    (and further out until it has `count`), so the starts are near in position first, then in
-    the constrained tool axes. A start near the target turns most solves into a few
-    Gauss-Newton steps.
-    """
-    Q, F, lo, inv, G, order, start = _bank(robot, tuple(bool(f) for f in mask), float(length),
-                                           samples, seed)
-    best = np.empty((targets.shape[0], min(count, samples)), dtype=np.int64)
-    nearest = _nearest_parallel if targets.shape[0] >= 64 else _nearest
-    nearest(np.ascontiguousarray(targets[:, :3, 3]), _features(targets, mask, length), F, lo,
-            inv, G, order, start, best)
-    return Q[best]
+def track(kernel_args: KernelArgs, targets: np.ndarray, q_start: np.ndarray, task: tuple,
+          max_iter: int, max_step: float) -> tuple[np.ndarray, int, int]:
+    """Follow targets (K, 4, 4) from q_start (n,) with Levenberg-Marquardt: (q (followed, n),
+    followed, cause); see `solve_targets`."""
+    K, n = targets.shape[0], q_start.shape[0]
+    q = np.empty((K, n))
+    starts = _writable(np.broadcast_to(q_start, (K, 1, n)))
+    followed, cause = solve_targets(
+        0, K, _writable(targets), starts, kernel_args.chain, kernel_args.limits, task,
+        (int(max_iter), 0, LM, 0, 1, float(max_step), 0), q, np.zeros(K, dtype=np.bool_),
+        np.zeros(K, dtype=np.int64), np.empty((K, 2)))
+    return q[:followed], int(followed), int(cause)

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 
-_jit = numba.njit(cache=True, nogil=True)
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 NAMED_MASKS = {
     "pose": (1, 1, 1, 1, 1, 1),
@@ -98,6 +98,116 @@ def task_errors_one(T, Tt, mask):
     db = Tt[0, o] * kx + Tt[1, o] * ky + Tt[2, o] * kz
     return math.sqrt(p2), _angle(T[0, o] - da * kx, T[1, o] - da * ky, T[2, o] - da * kz,
                                  Tt[0, o] - db * kx, Tt[1, o] - db * ky, Tt[2, o] - db * kz)
+
+
+@_jit
+def _log_rotation(E, out):
+    """Rotation vector (3,) of the rotation E (3, 3) into out; accurate near 0 and pi."""
+    sx, sy, sz = E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]
+    s = 0.5 * math.sqrt(sx * sx + sy * sy + sz * sz)
+    c = 0.5 * (E[0, 0] + E[1, 1] + E[2, 2] - 1.0)
+    angle = math.atan2(s, c)
+    if angle < 1e-6:
+        f = 0.5 * (1.0 + angle * angle / 6.0)           # angle / (2 sin angle), series
+        out[0], out[1], out[2] = f * sx, f * sy, f * sz
+    elif angle < math.pi - 1e-6:
+        f = angle / (2.0 * s)
+        out[0], out[1], out[2] = f * sx, f * sy, f * sz
+    else:
+        # Near pi the skew part vanishes: take the axis from the diagonal of (E + I) / 2.
+        k = 0
+        if E[1, 1] > E[k, k]:
+            k = 1
+        if E[2, 2] > E[k, k]:
+            k = 2
+        v0, v1, v2 = E[0, k], E[1, k], E[2, k]
+        if k == 0:
+            v0 += 1.0
+        elif k == 1:
+            v1 += 1.0
+        else:
+            v2 += 1.0
+        norm = math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+        sign = 1.0 if (v0 * sx + v1 * sy + v2 * sz) >= 0.0 else -1.0
+        f = sign * angle / norm
+        out[0], out[1], out[2] = f * v0, f * v1, f * v2
+
+
+@_jit
+def task_residual(T, J, Tt, mask, rows, e, A, E, w):
+    """Residual e (m,) of the task and its Jacobian A (m, n), so that ``A dq = e`` is the
+    Gauss-Newton step, at tool pose T (4, 4) with geometric Jacobian J (6, n, base frame).
+    Returns |e|^2.
+
+    Rows follow `rows` (the mask's flags). Position rows: ``p_target - p`` (base frame).
+    Rotation rows, about the tool's own axes, are the derivatives of the very measure that
+    `task_errors_one` judges, so that a solver that drives e to zero meets the tolerance:
+
+    - three flags: ``log(R^T R_target)``;
+    - two flags (free axis f, b the target's f axis in tool coordinates): the rotation that
+      turns the tool's f axis onto b, ``angle * (e_f x b) / |e_f x b|``;
+    - one flag about axis k (o, p the next axes, a the target's o axis in tool coordinates):
+      ``atan2(a_p, a_o)``, the heading about k; its Jacobian row has the terms that couple it
+      to rotations about o and p (without them a redundant arm settles where the log's k
+      component vanishes but the heading does not).
+    """
+    n = J.shape[1]
+    count = mask[3] + mask[4] + mask[5]
+    for r in range(3):
+        for c in range(3):
+            E[r, c] = T[0, r] * Tt[0, c] + T[1, r] * Tt[1, c] + T[2, r] * Tt[2, c]
+    if count == 3:
+        _log_rotation(E, w)
+    for i in range(rows.shape[0]):                     # positions, and R^T J_w rows as a start
+        r = rows[i]
+        if r < 3:
+            e[i] = Tt[r, 3] - T[r, 3]
+            for j in range(n):
+                A[i, j] = J[r, j]
+        else:
+            k = r - 3
+            e[i] = w[k] if count == 3 else 0.0
+            for j in range(n):                          # R^T J_w: about the tool's axes
+                A[i, j] = T[0, k] * J[3, j] + T[1, k] * J[4, j] + T[2, k] * J[5, j]
+    if count == 2:
+        f = 0 if not mask[3] else (1 if not mask[4] else 2)
+        g, h = (f + 1) % 3, (f + 2) % 3
+        bf, bg, bh = E[f, f], E[g, f], E[h, f]
+        s = math.sqrt(bg * bg + bh * bh)
+        angle = math.atan2(s, bf)
+        if s > 1e-300:
+            scale = jac = angle / s
+            vg, vh = -bh, bg                             # e_f x b
+        else:                                           # aligned, or opposite: any normal axis
+            scale, jac = angle, 1.0
+            vg, vh = 1.0, 0.0
+        for i in range(rows.shape[0]):
+            r = rows[i]
+            if r >= 3:
+                k = r - 3
+                e[i] = scale * (vg if k == g else vh)
+                bk = bg if k == g else bh
+                for j in range(n):
+                    Wf = T[0, f] * J[3, j] + T[1, f] * J[4, j] + T[2, f] * J[5, j]
+                    A[i, j] = jac * (bf * A[i, j] - bk * Wf)
+    elif count == 1:
+        k = 0 if mask[3] else (1 if mask[4] else 2)
+        o, p = (k + 1) % 3, (k + 2) % 3
+        ak, ao, ap = E[k, o], E[o, o], E[p, o]
+        r2 = ao * ao + ap * ap
+        for i in range(rows.shape[0]):
+            if rows[i] >= 3:
+                if r2 > 1e-24:
+                    e[i] = math.atan2(ap, ao)
+                    c = ak / r2
+                    for j in range(n):
+                        Wo = T[0, o] * J[3, j] + T[1, o] * J[4, j] + T[2, o] * J[5, j]
+                        Wp = T[0, p] * J[3, j] + T[1, p] * J[4, j] + T[2, p] * J[5, j]
+                        A[i, j] -= c * (ao * Wo + ap * Wp)
+    cost = 0.0
+    for i in range(rows.shape[0]):
+        cost += e[i] * e[i]
+    return cost
 
 
 @_jit
