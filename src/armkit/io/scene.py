@@ -125,12 +125,6 @@ class _SceneFile(StrictModel):
     goal_pose: _PoseField | None = None
     planner: _PlannerField = _PlannerField()
 
-    @model_validator(mode="after")
-    def _one_goal(self):
-        if self.goal is not None and self.goal_pose is not None:
-            raise ValueError("expected either goal or goal_pose, found both")
-        return self
-
 
 @dataclass(frozen=True, eq=False)
 class PlanningProblem:
@@ -197,6 +191,8 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
         spec = _SceneFile.model_validate(document)
     except ValidationError as err:
         raise validation_error(path, err, _SceneFile) from None
+    if spec.goal is not None and spec.goal_pose is not None:
+        raise ModelFileError(path, "goal_pose", "either goal or goal_pose", "both")
     units = Units(spec.units.length, spec.units.angle)
     obstacles = [_obstacle(o, units) for o in spec.obstacles]
     if spec.scene is not None:
