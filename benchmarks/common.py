@@ -1,8 +1,18 @@
-"""Helpers the benchmark scripts share: timing, and the plain NumPy forward kinematics baseline."""
+"""Helpers the benchmark scripts share: timing over interleaved rounds with its spread, the
+machine's load, and the plain NumPy forward kinematics baseline.
+
+Every figure is timed over several rounds, and within a round armkit and its references run one
+after the other (interleaved), so that a burst of load from other work on a shared machine
+slows both alike instead of one alone; a figure is reported as min-median-max over the rounds,
+its ratio as the ratio of the medians with the range of the per-round ratios.
+"""
 
 from __future__ import annotations
 
+import os
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -17,6 +27,60 @@ def best_of(f, repeat: int) -> float:
         f()
         times.append(time.perf_counter() - t)
     return min(times)
+
+
+@dataclass(frozen=True)
+class Spread:
+    """Per-call times (s) of one function over the rounds."""
+
+    times: tuple[float, ...]
+
+    @property
+    def min(self) -> float:
+        return min(self.times)
+
+    @property
+    def median(self) -> float:
+        return float(np.median(self.times))
+
+    @property
+    def max(self) -> float:
+        return max(self.times)
+
+    def text(self, unit: str = "us") -> str:
+        """``median [min-max] unit``."""
+        k = {"s": 1.0, "ms": 1e3, "us": 1e6, "ns": 1e9}[unit]
+        digits = 3 if self.median * k < 10 else 1
+        return (f"{self.median * k:.{digits}f} [{self.min * k:.{digits}f}-"
+                f"{self.max * k:.{digits}f}] {unit}")
+
+
+def interleaved(functions: dict[str, Callable[[], object]], rounds: int = 7,
+                number: int = 1) -> dict[str, Spread]:
+    """Time each function over `rounds` rounds of `number` calls, the functions taking turns
+    within each round; the per-call time of every round, per function."""
+    times: dict[str, list[float]] = {name: [] for name in functions}
+    for _ in range(rounds):
+        for name, f in functions.items():
+            start = time.perf_counter()
+            for _ in range(number):
+                f()
+            times[name].append((time.perf_counter() - start) / number)
+    return {name: Spread(tuple(t)) for name, t in times.items()}
+
+
+def ratio(reference: Spread, ours: Spread) -> str:
+    """Reference time / armkit time: the ratio of the medians and the range of the per-round
+    ratios (the rounds are interleaved, so each round's pair saw the same load)."""
+    per_round = [r / o for r, o in zip(reference.times, ours.times)]
+    return f"{reference.median / ours.median:.2f}x [{min(per_round):.2f}-{max(per_round):.2f}]"
+
+
+def load() -> str:
+    """The machine's load averages and core count, printed with every run's figures."""
+    one, five, fifteen = os.getloadavg()
+    return (f"load average {one:.2f} {five:.2f} {fifteen:.2f} (1, 5, 15 min) on "
+            f"{os.cpu_count()} cores")
 
 
 def numpy_chain(table: DHTable):

@@ -14,7 +14,10 @@
 4. retiming a 6-joint path through 10 waypoints within velocity and acceleration limits:
    against toppra on the same spline and the same grid, with both durations.
 
-Every ratio is reference time / armkit time, measured in the same run (above 1: armkit faster).
+Every figure is min-median-max over rounds in which armkit and its reference take turns
+(benchmarks/common.py); every ratio is reference time / armkit time (above 1: armkit faster),
+the ratio of the medians with the range of the per-round ratios. The load average is printed
+before and after.
 """
 
 from __future__ import annotations
@@ -32,14 +35,23 @@ from scipy.interpolate import CubicSpline, make_interp_spline
 
 from armkit.trajectory import jerk_limited, jerk_limited_profile, retime, spline, waypoint_path
 from armkit.trajectory.splines import _System
-from common import best_of
+from common import Spread, interleaved, load, ratio
 
 logging.getLogger("toppra").setLevel(logging.ERROR)
 
 
-def line(case: str, ours: float, name: str, ref: float, unit: str = "ms", scale: float = 1e3):
-    print(f"  {case:44} {ours * scale:10.3f} {unit}   {name:24} {ref * scale:10.3f} {unit}"
-          f"   {ref / ours:6.1f}x")
+def line(case: str, ours: Spread, name: str, ref: Spread, unit: str = "ms"):
+    print(f"  {case:38} {ours.text(unit):>28}   {name:26} {ref.text(unit):>28}   "
+          f"{ratio(ref, ours)}")
+
+
+def pair(ours, reference, rounds: int, number: int = 1) -> tuple[Spread, Spread]:
+    times = interleaved({"ours": ours, "reference": reference}, rounds, number)
+    return times["ours"], times["reference"]
+
+
+def per(spread: Spread, count: int) -> Spread:
+    return Spread(tuple(t / count for t in spread.times))
 
 
 def dense_solve(t, q, degrees) -> None:
@@ -86,8 +98,8 @@ def splines(rng, repeat: int) -> None:
              ("4-5-...-5 (least jerk)", [4] + [5] * 99, "NumPy dense solve",
               lambda: dense_solve(t, q, [4] + [5] * 99))]
     for case, degrees, name, reference in cases:
-        ours = best_of(lambda: spline(t, q, degrees), repeat)
-        line(case, ours, name, best_of(reference, repeat))
+        ours, ref = pair(lambda: spline(t, q, degrees), reference, repeat)
+        line(case, ours, name, ref)
 
 
 def evaluation(rng, count: int, repeat: int) -> None:
@@ -103,11 +115,12 @@ def evaluation(rng, count: int, repeat: int) -> None:
         s = tr.sample(samples[:1000])
         assert np.allclose(s.qddd, reference(samples[:1000], 3), atol=1e-6)
         assert np.allclose(numpy_evaluate(tr, samples[:1000])[3], s.qddd, atol=1e-9)
-        ours = best_of(lambda: tr.sample(samples), repeat)
-        scipy_time = best_of(lambda: [reference(samples, r) for r in range(4)], repeat)
-        numpy_time = best_of(lambda: numpy_evaluate(tr, samples), max(1, repeat // 2))
-        line(f"degree {degree}: Trajectory.sample", ours, "scipy (4 calls)", scipy_time)
-        line("", ours, "NumPy Horner", numpy_time)
+        times = interleaved({"ours": lambda: tr.sample(samples),
+                             "scipy": lambda: [reference(samples, r) for r in range(4)],
+                             "numpy": lambda: numpy_evaluate(tr, samples)}, repeat)
+        line(f"degree {degree}: Trajectory.sample", times["ours"], "scipy (4 calls)",
+             times["scipy"])
+        line("", times["ours"], "NumPy Horner", times["numpy"])
 
 
 def profiles(rng, pairs: int, repeat: int) -> None:
@@ -128,14 +141,18 @@ def profiles(rng, pairs: int, repeat: int) -> None:
 
     ours = jerk_limited_profile(q0, qf, vmax, amax, jmax).duration
     worst = np.abs(ours / reference() - 1).max()
-    batch = best_of(lambda: jerk_limited_profile(q0, qf, vmax, amax, jmax), repeat)
-    loop = best_of(reference, repeat)
-    line("batch jerk_limited_profile, per pair", batch / pairs, "ruckig.calculate, per pair",
-         loop / pairs, "us", 1e6)
-    one = best_of(lambda: jerk_limited_profile(q0[0], qf[0], vmax, amax, jmax), 20 * repeat)
-    line("one jerk_limited_profile call", one, "one ruckig.calculate", loop / pairs, "us", 1e6)
-    one = best_of(lambda: jerk_limited(q0[0], qf[0], vmax, amax, jmax), 20 * repeat)
-    line("one jerk_limited (a Trajectory)", one, "one ruckig.calculate", loop / pairs, "us", 1e6)
+    batch, loop = pair(lambda: jerk_limited_profile(q0, qf, vmax, amax, jmax), reference, repeat)
+    line("batch jerk_limited_profile, per pair", per(batch, pairs), "ruckig.calculate, per pair",
+         per(loop, pairs), "us")
+    inp.current_position, inp.target_position = starts[0], goals[0]
+    a, b = q0[0], qf[0]
+    times = interleaved({"profile": lambda: jerk_limited_profile(a, b, vmax, amax, jmax),
+                         "trajectory": lambda: jerk_limited(a, b, vmax, amax, jmax),
+                         "ruckig": lambda: otg.calculate(inp, out)}, repeat, number=1000)
+    line("one jerk_limited_profile call", times["profile"], "one ruckig.calculate",
+         times["ruckig"], "us")
+    line("one jerk_limited (a Trajectory)", times["trajectory"], "one ruckig.calculate",
+         times["ruckig"], "us")
     print(f"  largest relative duration difference to ruckig: {worst:.1e}")
 
 
@@ -154,9 +171,9 @@ def retiming(rng, repeat: int) -> None:
                                             parametrizer="ParametrizeConstAccel")
         return algorithm.compute_trajectory()
 
-    ours_tr, theirs_tr = retime(path, vmax, amax), reference()
-    ours = best_of(lambda: retime(path, vmax, amax), repeat)
-    line("retime (TOPP-RA, numba)", ours, "toppra TOPPRA", best_of(reference, repeat))
+    ours_tr, theirs_tr = retime(path, vmax, amax).trajectory, reference()
+    ours, ref = pair(lambda: retime(path, vmax, amax), reference, repeat)
+    line("retime (TOPP-RA, numba)", ours, "toppra TOPPRA", ref)
     dense = ours_tr.sample(np.linspace(0, ours_tr.end, 200_001))
     ts = np.linspace(0, theirs_tr.duration, 200_001)
     print(f"  duration: armkit {ours_tr.duration:.5f} s, toppra {theirs_tr.duration:.5f} s "
@@ -176,11 +193,13 @@ def main() -> None:
     spline([0, 1], [[0.0], [1.0]], 5).sample(np.linspace(0, 1, 10_000))     # compile kernels
     retime([[0.0, 0.0], [1.0, 1.0]], 1.0, 1.0, grid=10)
     jerk_limited_profile(np.zeros(2), np.ones(2), 1.0, 1.0, 1.0)
-    print(f"{'':46} {'armkit':>13}   {'reference':24} {'':>13}   ratio")
+    print(load())
+    print(f"  {'':38} {'armkit':>28}   {'reference':26} {'':>28}   ratio [per round]")
     splines(rng, repeat)
     evaluation(rng, 100_000 if args.quick else 1_000_000, repeat)
     profiles(rng, 1000, repeat)
     retiming(rng, repeat)
+    print(load())
 
 
 if __name__ == "__main__":

@@ -8,9 +8,12 @@ against a plain NumPy pipeline measured in the same run.
 Robot: inspection_6dof (6R), voxels of 50 mm, chunks of armkit.workspace.CHUNK samples.
 The baseline draws the same samples chunk by chunk, runs forward kinematics as a vectorised
 NumPy einsum over the DH matrices (benchmarks/fk.py), and keeps bounds, reach and the set of
-occupied voxels (np.unique and np.union1d): no Python loop over samples. Every ratio is baseline
-time / armkit time at the same n. The Dask cluster runs on loopback: two worker processes with
-one thread each, started before the clock.
+occupied voxels (np.unique and np.union1d): no Python loop over samples. Every figure is
+min-median-max over rounds in which the baseline, armkit in this process (threads chosen by
+armkit, and one thread) and armkit on Dask take turns (benchmarks/common.py); every ratio is
+baseline time / armkit time at the same n, the ratio of the medians with the range of the
+per-round ratios. The Dask cluster runs on loopback: two worker processes with one thread
+each, started before the clock. The load average is printed before and after.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from distributed import Client, LocalCluster
 
 import armkit
 from armkit.sampled_workspace import CHUNK
-from common import best_of, numpy_chain
+from common import interleaved, load, numpy_chain, ratio
 
 ROBOT, RESOLUTION = "inspection_6dof", 0.05
 
@@ -79,31 +82,39 @@ def main() -> None:
     robot = armkit.robot(ROBOT)
     sizes = [1_000_000] if args.quick else [1_000_000, 10_000_000]
     armkit.workspace(robot, 10_000, resolution=RESOLUTION)             # load the FK kernels
-    print(f"{ROBOT}, voxels {RESOLUTION * 1000:g} mm, chunks of {CHUNK} samples\n")
-    print(f"{'case':22} {'n':>6} {'armkit':>9} {'samples/s':>11} {'NumPy':>9} "
-          f"{'samples/s':>11} {'ratio':>6}")
+    print(f"{ROBOT}, voxels {RESOLUTION * 1000:g} mm, chunks of {CHUNK} samples; {load()}\n")
+    print(f"{'case':24} {'n':>6} {'armkit':>24} {'NumPy':>24} {'ratio [per round]':>24}")
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None) as cluster, Client(cluster) as client:
         armkit.workspace(robot, 300_000, resolution=RESOLUTION, scheduler=client)    # warm up
         for n in sizes:
-            repeat = 3 if n <= 1_000_000 else 1
-            base = best_of(lambda: numpy_workspace(robot, n), repeat)
-            lo, hi, reach, volume = numpy_workspace(robot, n) if n <= 1_000_000 else (None,) * 4
-            for case, scheduler in (("local (this process)", None),
-                                    ("Dask, 2 workers", client)):
-                ws = None
+            results = {}
 
-                def run():
-                    nonlocal ws
-                    ws = armkit.workspace(robot, n, resolution=RESOLUTION, scheduler=scheduler)
+            def run(case, scheduler=None, threads=None):
+                def call():
+                    armkit.set_num_threads(threads)
+                    try:
+                        results[case] = armkit.workspace(robot, n, resolution=RESOLUTION,
+                                                         scheduler=scheduler)
+                    finally:
+                        armkit.set_num_threads(None)
+                return call
 
-                t = best_of(run, repeat)
-                if lo is not None:                  # same samples: same bounds and volume
+            cases = {"local (this process)": run("local"),
+                     "local, 1 thread": run("one", threads=1),
+                     "Dask, 2 workers": run("dask", client)}
+            times = interleaved({"numpy": lambda: numpy_workspace(robot, n), **cases},
+                                3 if n <= 1_000_000 else 1)
+            if n <= 1_000_000:                      # same samples: same bounds and volume
+                lo, hi, reach, volume = numpy_workspace(robot, n)
+                for ws in results.values():
                     assert np.allclose([ws.lower, ws.upper], [lo, hi], atol=1e-12)
                     assert abs(ws.reach - reach) < 1e-12
                     assert abs(ws.volume - volume) <= 2 * RESOLUTION**3
-                print(f"{case:22} {n:6.0e} {t:7.2f} s {n / t:11.3g} {base:7.2f} s "
-                      f"{n / base:11.3g} {base / t:5.1f}x")
+            for case in cases:
+                print(f"{case:24} {n:6.0e} {times[case].text('s'):>24} "
+                      f"{times['numpy'].text('s'):>24} {ratio(times['numpy'], times[case]):>24}")
+        print(load())
         if args.big:
             n = 100_000_000
             before = worker_peaks_mb(client)

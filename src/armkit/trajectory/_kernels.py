@@ -216,7 +216,7 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
                 return 3
             if not (0.0 < J[p, j] < math.inf):
                 return 4
-    own = [(0.0, 0.0, 0.0)] * n
+    own = np.zeros((n, 3))                      # each joint's own (tj, ta, tv)
     for p in range(P):
         if phase:
             v1 = a1 = j1 = math.inf
@@ -239,14 +239,15 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
         for j in range(n):
             D = abs(qf[p, j] - q0[p, j])
             if kind == 2:
-                own[j] = _trapezoid_shortest(D, V[p, j], A[p, j])
+                own[j, 0], own[j, 1], own[j, 2] = _trapezoid_shortest(D, V[p, j], A[p, j])
             else:
-                own[j] = _double_s_shortest(D, V[p, j], A[p, j], J[p, j])
+                own[j, 0], own[j, 1], own[j, 2] = _double_s_shortest(D, V[p, j], A[p, j],
+                                                                     J[p, j])
             if D > 0.0:
-                T = max(T, 2.0 * own[j][1] + own[j][2])
+                T = max(T, 2.0 * own[j, 1] + own[j, 2])
         for j in range(n):
             d = qf[p, j] - q0[p, j]
-            tj, ta, tv = own[j]
+            tj, ta, tv = own[j, 0], own[j, 1], own[j, 2]
             if d == 0.0 or 2.0 * ta + tv < T * (1.0 - 1e-12):
                 # Solving for T = the joint's own shortest would amplify rounding through a
                 # square root near zero, so the slowest joint keeps its own profile.
@@ -266,6 +267,58 @@ def profile_phases(kind: int, q0: np.ndarray, qf: np.ndarray, V: np.ndarray, A: 
     K = 3 if kind == 2 else 7
     times, values = np.empty((P, n, K + 1)), np.empty((P, n, K))
     return times, values, _timing(kind, q0, qf, V, A, J, phase, times, values)
+
+
+@_jit
+def profile_pieces(order, times, values, q0, tol):
+    """One problem's profile as one piecewise polynomial: breaks (m + 1,) merged over the
+    joints (closer than tol x duration count as one) and coefficients (m, order + 1, n), each
+    joint's state integrated exactly from rest at q0 through its phases (times (n, P + 1),
+    top derivatives (n, P)) and expanded about every merged break."""
+    n, P = values.shape
+    start, end = times[0, 0], times[0, P]
+    eps = tol * (end - start)
+    inner = np.sort(times[:, 1:P].copy().reshape(-1))
+    breaks = np.empty(inner.shape[0] + 2)
+    breaks[0] = start
+    m = 1
+    for t in inner:
+        if start + eps < t < end - eps and t - breaks[m - 1] > eps:
+            breaks[m] = t
+            m += 1
+    breaks[m] = end
+    # State (q, v, a) at the start of every phase of every joint.
+    state = np.zeros((n, P + 1, 3))
+    for j in range(n):
+        q, v, a = q0[j], 0.0, 0.0
+        for k in range(P):
+            state[j, k, 0], state[j, k, 1], state[j, k, 2] = q, v, a
+            h, top = times[j, k + 1] - times[j, k], values[j, k]
+            if order == 2:
+                q, v, a = q + v * h + top * h * h / 2.0, v + top * h, 0.0
+            else:
+                q, v, a = (q + v * h + a * h * h / 2.0 + top * h * h * h / 6.0,
+                           v + a * h + top * h * h / 2.0, a + top * h)
+        state[j, P, 0], state[j, P, 1], state[j, P, 2] = q, v, a
+    c = np.zeros((m, order + 1, n))
+    for j in range(n):
+        k = 0
+        for i in range(m):
+            b = breaks[i]
+            while k < P - 1 and times[j, k + 1] <= b + eps:
+                k += 1
+            tau, top = b - times[j, k], values[j, k]
+            q, v, a = state[j, k, 0], state[j, k, 1], state[j, k, 2]
+            if order == 2:
+                c[i, 0, j] = q + v * tau + top * tau * tau / 2.0
+                c[i, 1, j] = v + top * tau
+                c[i, 2, j] = top / 2.0
+            else:
+                c[i, 0, j] = q + v * tau + a * tau * tau / 2.0 + top * tau * tau * tau / 6.0
+                c[i, 1, j] = v + a * tau + top * tau * tau / 2.0
+                c[i, 2, j] = (a + top * tau) / 2.0
+                c[i, 3, j] = top / 6.0
+    return breaks[:m + 1].copy(), c
 
 
 # --- TOPP-RA (retime.py) -----------------------------------------------------------------------

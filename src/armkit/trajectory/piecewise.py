@@ -10,6 +10,8 @@ that a trajectory known only by its samples (a Cartesian line through IK) fits i
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -88,8 +90,12 @@ class Trajectory:
         object.__setattr__(self, "breaks", breaks)
         object.__setattr__(self, "coefficients", coefficients)
         object.__setattr__(self, "knots", knots)
-        # Per derivative r, the coefficients of d^r q / dt^r: the evaluation kernel's table.
-        object.__setattr__(self, "_table", _derivative_table(coefficients, len(DERIVATIVES)))
+
+    @cached_property
+    def _table(self) -> NDArray:
+        """Per derivative r, the coefficients of d^r q / dt^r: the evaluation kernel's table,
+        built at the first evaluation (building a trajectory need not pay for it)."""
+        return _derivative_table(self.coefficients, len(DERIVATIVES))
 
     @property
     def n(self) -> int:
@@ -212,13 +218,19 @@ def at_rest(q: ArrayLike, label: str = "") -> Trajectory:
 
 
 def _derivative_table(c: NDArray, count: int) -> NDArray:
-    """table[i, r, k, j]: coefficient k of the r-th derivative (zero padded), (m, count, K, n)."""
-    m, K, n = c.shape
-    table = np.zeros((m, count, K, n))
-    for r in range(count):
-        for k in range(r, K):
-            table[:, r, k - r] = c[:, k] * _falling(k, r)
-    return table
+    """table[i, r, k, j]: coefficient k of the r-th derivative (zero padded), (m, count, K, n).
+
+    Coefficient k of the r-th derivative is ``c[k + r] (k + r)! / k!``: one gather and one
+    product for every r and k at once.
+    """
+    K = c.shape[1]
+    r = np.arange(count)[:, None]
+    source = np.arange(K) + r                               # (count, K): k + r
+    factor = np.ones((count, K))
+    for i in range(1, count):                               # (k + r) (k + r - 1) ... (k + 1)
+        factor[i:] *= source[i:] - i + 1
+    factor[source >= K] = 0.0
+    return c[:, np.minimum(source, K - 1), :] * factor[None, :, :, None]
 
 
 def _falling(k: int, r: int) -> float:

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.trajectory import _kernels
-from armkit.trajectory.piecewise import Trajectory, at_rest, merge
+from armkit.trajectory.piecewise import Trajectory, at_rest
 
 Sync = Literal["time", "phase"]
 
@@ -177,19 +177,9 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
                          f"{profile.duration.shape}")
     if not profile.duration > 0:                    # the goal is the start
         return at_rest(profile.q0, label)
-    n, P, order = profile.q0.shape[0], profile.values.shape[-1], profile.order
-    dt = np.diff(profile.times, axis=-1)
-    factorials = np.cumprod(np.r_[1.0, np.arange(1, order + 1)])[:, None]
-    state = np.zeros((order + 1, n))                  # q, v, a (, j) at the phase's start
-    state[0] = profile.q0
-    coefficients = np.empty((n, P, order + 1))
-    for k in range(P):
-        state[order] = profile.values[:, k]
-        coefficients[:, k] = (state / factorials).T
-        taylor = dt[:, k] ** np.arange(order + 1)[:, None] / factorials    # tau^i / i!
-        state = np.array([np.sum(state[r:] * taylor[:order + 1 - r], axis=0)
-                          for r in range(order + 1)])
-    breaks, c = merge(profile.times, coefficients)
+    breaks, c = _kernels.profile_pieces(profile.order, np.ascontiguousarray(profile.times),
+                                        np.ascontiguousarray(profile.values),
+                                        np.ascontiguousarray(profile.q0, dtype=float), 1e-12)
     return Trajectory(breaks, c, label=label)
 
 

@@ -1,0 +1,121 @@
+"""Start-up cost: `import armkit` and the first call of each capability, in fresh processes.
+
+    python benchmarks/startup.py             # 3 rounds
+    python benchmarks/startup.py --rounds 5
+
+Each figure is one fresh Python process that imports armkit, loads a built-in robot and makes
+one first call, timed from inside the process. "Empty cache" points ``NUMBA_CACHE_DIR`` at a
+new temporary directory, so the call compiles its numba kernels as on a fresh install; "warm
+cache" runs the same process again on that directory, as every later session does. Each call
+gets its own cache directory, so that no call finds kernels another call compiled. Figures are
+min-median-max over the rounds, the calls interleaved within a round; the load average is
+printed with them.
+
+The calls: `fk` and `jacobian` of one UR5 configuration; `ik` of one UR5 pose (closed form)
+and of one tool_changer_6dof pose (numeric, Levenberg-Marquardt); `workspace` of
+inspection_6dof with 10,000 samples; `spline` 4-5-5 through paper 4's Table 1, sampled at 100
+times; `retime` of 10 waypoints. Their inputs are built without armkit's kernels, so each
+process compiles only what its own call needs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+from common import Spread, load
+
+CHILD = """
+import json, sys, time
+start = time.perf_counter()
+import armkit
+imported = time.perf_counter()
+import numpy as np
+from armkit.spatial import pose_from_xyz_rpy
+what = sys.argv[1]
+if what in ("fk", "jacobian", "ik closed form"):
+    robot = armkit.robot("ur5")
+elif what == "ik numeric":
+    robot = armkit.robot("tool_changer_6dof")
+elif what in ("workspace", "retime"):
+    robot = armkit.robot("inspection_6dof")
+loaded = time.perf_counter()
+q = np.deg2rad([10.0, -80.0, 70.0, -60.0, -90.0, 20.0])
+if what == "import":
+    pass
+elif what == "fk":
+    armkit.fk(robot, q)
+elif what == "jacobian":
+    armkit.jacobian(robot, q)
+elif what == "ik closed form":
+    result = armkit.ik(robot, pose_from_xyz_rpy([0.4, 0.1, 0.3], [np.pi, 0.0, 0.0]))
+    assert result.success, result.reason
+elif what == "ik numeric":
+    from armkit.spatial import exp_se3
+    # A reachable pose from the product of exponentials (NumPy, no kernel): the tool's pose
+    # at q = (20, -20, -60 deg, 0.3 m, 30, 10 deg).
+    target = robot.chain.T_home
+    for screw, value in reversed(list(zip(robot.chain.screws, np.r_[np.deg2rad(
+            [20.0, -20.0, -60.0]), 0.3, np.deg2rad([30.0, 10.0])]))):
+        target = exp_se3(screw * value) @ target
+    result = armkit.ik(robot, target)
+    assert result.success, result.reason
+elif what == "workspace":
+    armkit.workspace(robot, 10_000)
+elif what == "spline":
+    points = np.deg2rad([[50.4, -180, 130], [43.2, -166, 123], [35, -152, 116], [27, -137, 108]])
+    armkit.spline([0, 2, 4, 5], points, "4-5-5").sample(np.linspace(0, 5, 100))
+elif what == "retime":
+    waypoints = np.random.default_rng(0).uniform(-1.0, 1.0, (10, 6))
+    assert armkit.retime(waypoints, robot.velocity_limits, robot.acceleration_limits).success
+done = time.perf_counter()
+print(json.dumps({"import": imported - start, "robot": loaded - imported, "call": done - loaded}))
+"""
+
+CALLS = ("import", "fk", "jacobian", "ik closed form", "ik numeric", "workspace", "spline",
+         "retime")
+
+
+def run(what: str, cache: str) -> dict[str, float]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+    done = subprocess.run([sys.executable, "-c", CHILD, what], env=env, capture_output=True,
+                          text=True)
+    if done.returncode:
+        raise SystemExit(f"{what}: {done.stderr.strip().splitlines()[-1]}")
+    return json.loads(done.stdout)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=3)
+    args = parser.parse_args()
+    print(load())
+    cold: dict[str, list[dict]] = {c: [] for c in CALLS}
+    warm: dict[str, list[dict]] = {c: [] for c in CALLS}
+    for _ in range(args.rounds):
+        for what in CALLS:
+            with tempfile.TemporaryDirectory() as cache:
+                cold[what].append(run(what, cache))
+                warm[what].append(run(what, cache))
+    print(load())
+    print(f"\n{'first call':16} {'empty numba cache':>26} {'warm numba cache':>26}")
+    for what in CALLS:
+        key = "import" if what == "import" else "call"
+        a = Spread(tuple(r[key] for r in cold[what]))
+        b = Spread(tuple(r[key] for r in warm[what]))
+        print(f"{what:16} {a.text('s'):>26} {b.text('s'):>26}")
+    robots = Spread(tuple(r["robot"] for c in CALLS[1:] for r in cold[c] + warm[c]))
+    print(f"\n`import armkit` is the import alone; every other row is the call alone, after the"
+          f"\nimport and `armkit.robot(...)` (loading a built-in robot: {robots.text('s')}).")
+    imports = [r["import"] for c in CALLS for r in cold[c] + warm[c]]
+    print(f"`import armkit` over all {len(imports)} processes: median {np.median(imports):.3f} s")
+
+
+if __name__ == "__main__":
+    main()
