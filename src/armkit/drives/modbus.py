@@ -154,6 +154,16 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
         ``waypoint 3, joint q2: 190 deg outside the limits -180..180 deg``.
     """
     robot = register_map.robot
+    try:
+        values = np.asarray(q, dtype=float)
+    except (TypeError, ValueError):
+        values = None                         # joint_array says what was wrong
+    if values is not None and values.ndim in (1, 2) and values.shape[-1] == robot.n:
+        bad = ~np.isfinite(values.reshape(-1, robot.n))
+        if bad.any():
+            k, i = np.argwhere(bad)[0]
+            raise InputError(f"waypoint {k}, joint {robot.joint_names[i]}: expected a finite "
+                             f"value, found {values.reshape(-1, robot.n)[k, i]}")
     q = joint_array(robot, q, "waypoints")
     if q.ndim == 1:
         q = q[None]

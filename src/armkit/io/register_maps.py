@@ -60,7 +60,7 @@ class JointField(StrictModel):
     target: Address
     actual: Address | None = None
     type: DataType
-    scale: float = Field(1.0, gt=0, le=1e12, allow_inf_nan=False)
+    scale: float = Field(1.0, gt=0, le=1e12, allow_inf_nan=False, strict=True)
     word_order: Order | None = None
     byte_order: Order | None = None
 
