@@ -155,16 +155,10 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
     """
     robot = register_map.robot
     try:
-        values = np.asarray(q, dtype=float)
-    except (TypeError, ValueError):
-        values = None                         # joint_array says what was wrong
-    if values is not None and values.ndim in (1, 2) and values.shape[-1] == robot.n:
-        bad = ~np.isfinite(values.reshape(-1, robot.n))
-        if bad.any():
-            k, i = np.argwhere(bad)[0]
-            raise InputError(f"waypoint {k}, joint {robot.joint_names[i]}: expected a finite "
-                             f"value, found {values.reshape(-1, robot.n)[k, i]}")
-    q = joint_array(robot, q, "waypoints")
+        q = joint_array(robot, q, "waypoints")
+    except InputError:
+        _name_non_finite(robot, q)            # which waypoint and joint, if that was it
+        raise
     if q.ndim == 1:
         q = q[None]
     if q.ndim != 2 or len(q) == 0:
@@ -200,6 +194,21 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
                          f"{register_map.robot.joint_units[i]}/s over the velocity limit {limit:.6g} "
                          f"{register_map.robot.joint_units[i]}/s")
     return q
+
+
+def _name_non_finite(robot, q) -> None:
+    """Raise an InputError naming the first non-finite waypoint value of q (N, n) or (n,)."""
+    try:
+        values = np.asarray(q, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return
+    if values.ndim in (1, 2) and values.shape[-1] == robot.n:
+        values = values.reshape(-1, robot.n)
+        bad = np.argwhere(~np.isfinite(values))
+        if len(bad):
+            k, i = bad[0]
+            raise InputError(f"waypoint {k}, joint {robot.joint_names[i]}: expected a finite "
+                             f"value, found {values[k, i]}") from None
 
 
 class _Failed(Exception):
