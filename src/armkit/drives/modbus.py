@@ -65,6 +65,7 @@ ACK_POLL = 0.001   # s
 # Consecutive reads that must agree before the client acts on an unexpected acknowledgement.
 CONFIRM_READS = 2
 DEVICE_BUSY = 6    # the exception a drive answers to a write while another client holds its lock
+ILLEGAL_VALUE = 3  # the exception a drive answers to a waypoint it refuses (outside its limits)
 
 
 def port_number(port: int) -> int:
@@ -522,6 +523,9 @@ class DriveClient:
             cause = failed.cause
             if failed.code == DEVICE_BUSY and m.lock is not None:
                 cause = f"{cause}: {self._lock_text(self._lock_holder())}"
+            elif failed.code == ILLEGAL_VALUE:
+                cause = (f"{cause}: the drive refused the values it received (checked within "
+                         f"the limits here, so changed on the way or the drive's limits differ)")
             self._abandon()
             raise DriveError(cause, last, waypoint=k,
                              outcome_unknown=failed.unknown) from None
