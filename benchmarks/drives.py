@@ -51,8 +51,8 @@ from armkit.errors import DriveError, InputError
 ROOT = Path(__file__).resolve().parents[1]
 MAP = ROOT / "examples" / "drives" / "inspection_6dof.map.yaml"
 sys.path.insert(0, str(ROOT))                    # the tests' fault proxy and its cases
-from tests.drives.proxy import FaultProxy  # noqa: E402
-from tests.drives.test_report_truth import CASES as PROXY_CASES, Faults  # noqa: E402
+from tests.drives.proxy import FaultProxy
+from tests.drives.test_report_truth import CASES as PROXY_CASES, Faults
 
 
 def start_sim_drive() -> tuple[subprocess.Popen, int]:

@@ -17,8 +17,7 @@ from pyModbusTCP.client import ModbusClient
 
 from armkit.drives import DriveClient, SimDrive, load_register_map, send_waypoints
 from armkit.errors import DriveError
-from tests.drives.conftest import (INSPECTION, assert_report_true, drive_took, locked_map,
-                                   waypoints)
+from tests.drives.conftest import INSPECTION, assert_report_true, drive_took, locked_map, waypoints
 from tests.drives.proxy import FaultProxy, get_register, registers, set_register
 
 TIMEOUT, ACK_TIMEOUT = 0.3, 0.3   # s

@@ -41,7 +41,8 @@ from pydantic import Field, ValidationError
 from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap
 from armkit.errors import ArmkitError, ModelFileError
 from armkit.io.documents import StrictModel, read_yaml, validation_error
-from armkit.model import Robot, robot as load_robot_by_name
+from armkit.model import Robot
+from armkit.model import robot as load_robot_by_name
 
 DataType = Literal["int16", "uint16", "int32", "float32"]
 Order = Literal["big", "little"]
