@@ -186,7 +186,8 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
         k = int(np.argmax(dt <= 0))
         raise InputError(f"waypoint times: expected strictly increasing, found {t[k]:g} s then "
                          f"{t[k + 1]:g} s at waypoints {k} and {k + 1}")
-    speed = np.abs(np.diff(q, axis=0)) / dt[:, None]
+    with np.errstate(over="ignore"):          # a step over a denormal dt: inf, too fast
+        speed = np.abs(np.diff(q, axis=0)) / dt[:, None]
     too_fast = speed > robot.chain.velocity_limits
     if too_fast.any():
         k, i = np.argwhere(too_fast)[0]
