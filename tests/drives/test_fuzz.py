@@ -3,7 +3,7 @@ naming the file (and, for a map, the field), or loads into something that passes
 check against the file itself; never a hang, another exception, or a silently changed map.
 
 Seeded: ARMKIT_FUZZ_SEED (default 20261123). The count per kind is ARMKIT_FUZZ (default 200
-register maps and 100 waypoint files of each kind, a CI run; the issue's target run is
+register maps and 80 waypoint files of each kind, a CI run; the issue's target run is
 ARMKIT_FUZZ=2000). Each test prints its counts (pytest -s shows them).
 Every file is given at most 20 s (an alarm turns a hang into a failure, it is not a timing).
 """
@@ -26,7 +26,7 @@ from armkit.errors import ModelFileError
 from tests.drives.conftest import INSPECTION, WATER
 
 COUNT = int(os.environ.get("ARMKIT_FUZZ", "200"))                 # register maps
-WAYPOINT_COUNT = int(os.environ.get("ARMKIT_FUZZ", "100"))        # waypoint files of each kind
+WAYPOINT_COUNT = int(os.environ.get("ARMKIT_FUZZ", "80"))         # waypoint files of each kind
 SEED = int(os.environ.get("ARMKIT_FUZZ_SEED", "20261123"))
 HANG = 20   # s
 
