@@ -16,8 +16,11 @@ Ratio = armkit time / raw time (1.10 means armkit's checks cost 10 % over the ra
 armkit and the raw clients take turns, round by round, so that the bursts of a shared machine
 hit them alike; each line gives the best round and the median round.
 The fault table injects each fault into an in-process simulated drive at waypoint 3 of 10 and
-reports what armkit says, the last accepted waypoint, the time to report, and whether any
-waypoint was partly written.
+reports what armkit says, the last accepted waypoint, what the drive took (its own record),
+whether the report is true, the time to report, and whether any waypoint was partly written.
+The proxy rows put the tests' fault-injecting proxy (tests/drives/proxy.py) between client and
+drive: a corrupted waypoint index or target register, dropped responses, a second writer;
+"(lock)" rows use the map with the drive's lock register. Four clients then send at once.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ import socket
 import statistics
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -38,11 +42,17 @@ import numpy as np
 import pymodbus
 from pymodbus.client import ModbusTcpClient
 
+import yaml
+
 from armkit.drives import DriveClient, SimDrive, check_waypoints, load_register_map
-from armkit.drives import send_waypoints
+from armkit.drives import parse_register_map, send_waypoints
 from armkit.errors import DriveError, InputError
 
-MAP = Path(__file__).resolve().parents[1] / "examples" / "drives" / "inspection_6dof.map.yaml"
+ROOT = Path(__file__).resolve().parents[1]
+MAP = ROOT / "examples" / "drives" / "inspection_6dof.map.yaml"
+sys.path.insert(0, str(ROOT))                    # the tests' fault proxy and its cases
+from tests.drives.proxy import FaultProxy
+from tests.drives.test_report_truth import CASES as PROXY_CASES, Faults
 
 
 def start_sim_drive() -> tuple[subprocess.Popen, int]:
@@ -59,6 +69,9 @@ def start_sim_drive() -> tuple[subprocess.Popen, int]:
     return server, int(found.group(1))
 
 
+SPREAD: list[float] = []     # the slowest round of each timing, for the spread line
+
+
 def interleaved(functions, rounds: int) -> list[tuple[float, float]]:
     """(best, median) wall time of each function, s, over `rounds` rounds that call each in
     turn: a busy moment of a shared machine then hits all of them alike."""
@@ -68,6 +81,7 @@ def interleaved(functions, rounds: int) -> list[tuple[float, float]]:
             t = time.perf_counter()
             f()
             kept.append(time.perf_counter() - t)
+    SPREAD.extend(max(kept) for kept in times)
     return [(min(kept), statistics.median(kept)) for kept in times]
 
 
@@ -99,6 +113,7 @@ def sequences(m, port: int, q, repeat: int) -> None:
     assert drive.send(q).waypoints == len(q)
     (ours, ours_med), (same, same_med), (writes, writes_med) = interleaved(
         [lambda: drive.send(q), raw_same_requests, raw_writes_only], repeat)
+    slowest = SPREAD[-3:]
     (once, _), (checks, _) = interleaved(
         [lambda: send_waypoints(m, q, port=port), lambda: m.encode(check_waypoints(m, q))],
         max(repeat // 4, 5))
@@ -112,6 +127,8 @@ def sequences(m, port: int, q, repeat: int) -> None:
     print(f"  raw, {n} writes only          {writes * 1e3:7.2f} ms  (median "
           f"{writes_med * 1e3:.2f})   ratio {ours / writes:.2f}  (median "
           f"{ours_med / writes_med:.2f})")
+    print(f"  slowest rounds: armkit {slowest[0] * 1e3:.2f} ms, raw same {slowest[1] * 1e3:.2f} "
+          f"ms, raw writes {slowest[2] * 1e3:.2f} ms")
     print(f"  send_waypoints with connect   {once * 1e3:7.2f} ms  (a new connection each time)")
     print(f"  checks and encoding alone     {checks * 1e6:7.1f} us (no network)\n")
 
@@ -139,6 +156,7 @@ def single_writes(m, port: int, q, count: int, rounds: int) -> None:
     ours()
     (t_ours, m_ours), (t_same, m_same), (t_write, m_write) = interleaved(
         [ours, raw_same, raw_write], rounds)
+    slowest = SPREAD[-3:]
     drive.close()
     raw.close()
     print(f"checked single writes ({rounds} rounds of {count}; best round, median round)")
@@ -147,7 +165,9 @@ def single_writes(m, port: int, q, count: int, rounds: int) -> None:
     print(f"  raw write + read              {count / t_same:7.0f} /s {count / m_same:7.0f} /s   "
           f"ratio {t_ours / t_same:.2f}  (median {m_ours / m_same:.2f})")
     print(f"  raw write only                {count / t_write:7.0f} /s {count / m_write:7.0f} /s   "
-          f"ratio {t_ours / t_write:.2f}  (median {m_ours / m_write:.2f})\n")
+          f"ratio {t_ours / t_write:.2f}  (median {m_ours / m_write:.2f})")
+    print(f"  slowest rounds: armkit {count / slowest[0]:.0f} /s, raw write + read "
+          f"{count / slowest[1]:.0f} /s, raw write {count / slowest[2]:.0f} /s\n")
 
 
 def free_port() -> int:
@@ -157,7 +177,8 @@ def free_port() -> int:
 
 
 def faults(m, q) -> None:
-    """Each fault at waypoint 3 of 10: the report, last accepted, time, partial writes."""
+    """Each fault at waypoint 3 of 10: the report, last accepted, what the drive took (its own
+    record), whether the report is true, time, partial writes."""
     cases = [("connection refused", "refuse", {}, {}),
              ("nothing listening", None, {}, {}),
              ("connection dropped", "drop", {}, {}),
@@ -170,39 +191,113 @@ def faults(m, q) -> None:
              ("index not advancing", "ignore", {}, {}),
              ("read-back mismatch", "corrupt", {}, {}),
              ("limit violation", "limit", {}, {})]
+    cases += [(f"proxy: {case}", "proxy", {"case": case}, {}) for case in PROXY_CASES]
+    locked = locked_map(m)
     print("faults, injected at waypoint 3 of 10 (client: timeout 1 s, retries 0, "
-          "ack_timeout 1 s unless given)")
-    print(f"  {'fault':26} {'last':>4} {'unknown':>7} {'time':>9} {'partial':>7}  report")
-    for name, kind, inject, client in cases:
-        sim = SimDrive(m).start()
-        port = sim.port
-        sent = q.copy()
-        if kind == "limit":
-            sent[3, 1] = np.deg2rad(200.0)
-        elif kind is None:
-            sim.stop()
-            port = free_port()
-        elif kind == "refuse":
-            sim.inject("refuse")
-        else:
-            sim.inject(kind, at=3, **inject)
-        t = time.perf_counter()
-        try:
-            send_waypoints(m, sent, port=port, **client)
-            raise SystemExit(f"{name}: not reported")
-        except (DriveError, InputError) as err:
-            seconds = time.perf_counter() - t
-            last = getattr(err, "last_accepted", None)
-            unknown = getattr(err, "outcome_unknown", False)
-            report = getattr(err, "cause", str(err))
-        partial = sum((a, n) != (m.block_start, m.block_count) for a, n in sim.writes
-                      if a < m.block_start + m.block_count and a + n > m.block_start)
-        # The drive took waypoints 0..2; a corrupt write it takes too (with the wrong value).
-        expected = None if kind in (None, "refuse", "limit") else 3 if kind == "corrupt" else 2
-        mark = "" if last == expected else f"  WRONG, expected {expected}"
+          "ack_timeout 1 s unless given); 'took': the last waypoint the drive took, from its "
+          "own record")
+    print(f"  {'fault':54} {'last':>4} {'unknown':>7} {'took':>4} {'true':>5} {'time':>9} "
+          f"{'partial':>7}  report")
+    for register_map, tag in ((m, ""), (locked, " (lock)")):
+        for name, kind, inject, client in cases:
+            if tag and kind != "proxy" and kind != "corrupt":
+                continue
+            fault_row(register_map, q, name + tag, kind, inject, client)
+    for register_map, tag in ((m, "four clients at once"), (locked, "four clients, lock")):
+        concurrent(register_map, tag)
+
+
+def fault_row(m, q, name, kind, inject, client) -> None:
+    sim = SimDrive(m).start()
+    port = sim.port
+    sent = q.copy()
+    proxy = None
+    if kind == "limit":
+        sent[3, 1] = np.deg2rad(200.0)
+    elif kind is None:
         sim.stop()
-        print(f"  {name:26} {'none' if last is None else last:>4} {str(unknown):>7} "
-              f"{seconds * 1e3:7.1f} ms {partial:>7}  {report}{mark}")
+        port = free_port()
+    elif kind == "refuse":
+        sim.inject("refuse")
+    elif kind == "proxy":
+        hooks = Faults(m, inject["case"], sim.port)
+        proxy = FaultProxy(sim.port, hooks.on_request, hooks.on_response).__enter__()
+        port = proxy.port
+    else:
+        sim.inject(kind, at=3, **inject)
+    t = time.perf_counter()
+    try:
+        result = send_waypoints(m, sent, port=port, **client)
+        seconds = time.perf_counter() - t
+        last, unknown, report, failed = result.last_accepted, False, "sent whole", None
+    except (DriveError, InputError) as err:
+        seconds = time.perf_counter() - t
+        last = getattr(err, "last_accepted", None)
+        unknown = getattr(err, "outcome_unknown", False)
+        report = getattr(err, "cause", str(err))
+        failed = getattr(err, "waypoint", None)
+    if proxy is not None:
+        proxy.__exit__(None, None, None)
+    partial = sum((a, n) != (m.block_start, m.block_count) for a, n in sim.writes
+                  if a < m.block_start + m.block_count and a + n > m.block_start)
+    took = drive_took(sim, m, sent)
+    true = took == last or (unknown and took == failed)
+    sim.stop()
+    print(f"  {name:54} {'none' if last is None else last:>4} {str(unknown):>7} "
+          f"{'none' if took is None else took:>4} {str(true):>5} {seconds * 1e3:7.1f} ms "
+          f"{partial:>7}  {report}")
+
+
+def concurrent(m, name: str, clients: int = 4) -> None:
+    """`clients` clients send 10 waypoints each to one drive at once."""
+    start, outcomes = threading.Barrier(clients, timeout=10), [None] * clients
+    sequences = [np.random.default_rng(100 + c).uniform(m.robot.lower, m.robot.upper,
+                                                        (10, m.n)) for c in range(clients)]
+
+    def send(c):
+        start.wait()
+        try:
+            outcomes[c] = send_waypoints(m, sequences[c], port=sim.port)
+        except DriveError as err:
+            outcomes[c] = err
+
+    with SimDrive(m) as sim:
+        threads = [threading.Thread(target=send, args=(c,)) for c in range(clients)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join(30)
+        rows = []
+        for c, outcome in enumerate(outcomes):
+            took = drive_took(sim, m, sequences[c])
+            if isinstance(outcome, DriveError):
+                true = took == outcome.last_accepted or (
+                    outcome.outcome_unknown and took == outcome.waypoint)
+                rows.append((f"failed at {outcome.waypoint}", outcome.last_accepted,
+                             outcome.outcome_unknown, took, true, outcome.cause))
+            else:
+                rows.append(("sent whole", outcome.last_accepted, False, took,
+                             took == outcome.last_accepted, ""))
+    for c, (what, last, unknown, took, true, cause) in enumerate(rows):
+        print(f"  {name + f', client {c}: ' + what:54} {'none' if last is None else last:>4} "
+              f"{str(unknown):>7} {'none' if took is None else took:>4} {str(true):>5} "
+              f"{'':>9} {'':>7}  {cause}")
+
+
+def locked_map(m):
+    """The map of `m`'s file with a lock register (29) and a fault reset (30)."""
+    doc = yaml.safe_load(MAP.read_text())
+    doc["command"].update(lock=29, reset=30)
+    return parse_register_map(doc, "inspection_6dof with a lock")
+
+
+def drive_took(sim, m, q):
+    """The last waypoint of q whose targets the drive took (its record), or None."""
+    keep = [i for i in range(m.block_count) if i != m.waypoint - m.block_start]
+    sent = m.encode(q)[:, keep]
+    taken = {tuple(np.array(block)[keep]) for block in list(sim.taken)}
+    found = [k for k in range(len(q)) if tuple(sent[k]) in taken]
+    return max(found) if found else None
 
 
 def main() -> None:
@@ -213,7 +308,7 @@ def main() -> None:
     m = load_register_map(MAP)
     q = np.random.default_rng(0).uniform(m.robot.lower, m.robot.upper, (10, m.n))
     print(f"pymodbus {pymodbus.__version__}, Python {sys.version.split()[0]}; simulated drive "
-          f"in another process on loopback\n")
+          f"in another process on loopback; load average {os.getloadavg()[0]:.1f}\n")
     server, port = start_sim_drive()
     try:
         sequences(m, port, q, 50 if args.quick else 400)
@@ -222,6 +317,7 @@ def main() -> None:
         server.terminate()
         server.wait(timeout=10)
     faults(m, q)
+    print(f"\nload average at the end: {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

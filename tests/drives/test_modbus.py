@@ -272,3 +272,13 @@ def test_the_readme_example_runs(monkeypatch):
     scope = {"np": np, "armkit": armkit}
     exec(code, scope)                                             # noqa: S102 (our README)
     assert scope["result"].last_accepted == 2
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_waypoints_are_named_before_anything_leaves(inspection_map, sim, bad):
+    q = waypoints(inspection_map, 4)
+    q[2, 4] = bad
+    with pytest.raises(InputError, match=rf"waypoint 2, joint q5: expected a finite value, "
+                                         rf"found {bad}"):
+        send_waypoints(inspection_map, q, port=sim.port)
+    assert list(sim.requests) == []

@@ -161,6 +161,18 @@ GOOD = INSPECTION.read_text()
     ("{name: q4, target: 6, ", "{name: q4, ", "joints[3].target", "a value, found nothing"),
     ("actual: 22, ", "", "joints[3].actual", "an actual-position register, as the other "
      "joints have, found none"),
+    ("scale: 1000}\n  - {name: q2", "scale: true}\n  - {name: q2", "joints[0].scale",
+     "a valid number, found True"),
+    ("enable: 28", "enable: 28\n  lock: 13", "status.accepted",
+     "a register of its own, found 13, which command.lock also uses (13)"),
+    ("enable: 28", "enable: 28\n  reset: 70000", "command.reset",
+     "less than or equal to 65535"),
+    ("enable: 28", "enable: 28\n  lock: true", "command.lock", "a valid integer, found True"),
+    ("readback: true", "readback: true\nout_of_limits: {response: stop}",
+     "out_of_limits.response", "'exception' or 'fault', found 'stop'"),
+    ("readback: true", "readback: true\nout_of_limits: {response: fault, fault_code: 0}",
+     "out_of_limits.fault_code", "greater than or equal to 1, found 0"),
+    ("readback: true", "readback: 1", "readback", "a valid boolean, found 1"),
 ])
 def test_each_mistake_names_its_field(tmp_path, old, new, field, words):
     assert old in GOOD, old
@@ -201,3 +213,47 @@ def test_not_a_mapping_and_bad_yaml(tmp_path):
     path.write_text("robot: [\n")
     with pytest.raises(ModelFileError, match="m.yaml: line 2: expected valid YAML"):
         load_register_map(path)
+
+
+def test_a_fault_response_needs_a_register_to_report_it(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text(textwrap.dedent("""\
+        robot: water_supply
+        out_of_limits: {response: fault}
+        joints:
+          - {target: 0, type: float32}
+          - {target: 2, type: float32}
+          - {target: 4, type: float32}
+          - {target: 6, type: float32}
+        """))
+    with pytest.raises(ModelFileError, match=r"m.yaml: out_of_limits.response: expected "
+                                             r"exception, since the map has no status.state"):
+        load_register_map(path)
+
+
+def test_lock_reset_and_limit_response_load(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text(GOOD.replace("enable: 28", "enable: 28\n  lock: 29\n  reset: 30")
+                    + "out_of_limits: {response: fault, fault_code: 0x5530}\n")
+    m = load_register_map(path)
+    assert (m.lock, m.reset, m.limit_response, m.limit_fault_code) == (29, 30, "fault", 0x5530)
+    assert m.ack_reads == ((0, 16), (29, 1))                    # the lock is read with the status
+
+
+@pytest.mark.parametrize("text, field, words", [
+    ("a: &a [x, x, x, x, x, x, x, x]\nb: &b [*a, *a, *a, *a, *a, *a, *a, *a]\n"
+     "c: &c [*b, *b, *b, *b, *b, *b, *b, *b]\nd: &d [*c, *c, *c, *c, *c, *c, *c, *c]\n"
+     "e: &e [*d, *d, *d, *d, *d, *d, *d, *d]\nf: [*e, *e, *e, *e, *e, *e, *e, *e]\n",
+     "", "at most 10000 values (YAML aliases count each time used)"),
+    ("robot: x\njoints: " + "[" * 12 + "]" * 12 + "\n", "line 2", "fields nested at most 8"),
+    ("robot: " + "[" * 3000 + "]" * 3000 + "\n", "line 1", "fields nested at most 8 deep"),
+    ("robot:\n" + "".join(" " * (2 * i + 2) + "-\n" for i in range(20)) + " " * 42 + "x\n",
+     "robot", "fields nested at most 8 deep"),                  # block style, no brackets
+])
+def test_alias_bombs_and_deep_nesting_are_refused(tmp_path, text, field, words):
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    with pytest.raises(ModelFileError) as err:
+        load_register_map(path)
+    assert str(err.value).startswith(f"{path}: ") and words in str(err.value), str(err.value)
+    assert err.value.field.startswith(field)

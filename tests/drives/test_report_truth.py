@@ -17,8 +17,7 @@ from pyModbusTCP.client import ModbusClient
 
 from armkit.drives import DriveClient, SimDrive, load_register_map, send_waypoints
 from armkit.errors import DriveError
-from tests.drives.conftest import (INSPECTION, assert_report_true, drive_took, locked_map,
-                                   waypoints)
+from tests.drives.conftest import INSPECTION, assert_report_true, drive_took, locked_map, waypoints
 from tests.drives.proxy import FaultProxy, get_register, registers, set_register
 
 TIMEOUT, ACK_TIMEOUT = 0.3, 0.3   # s
@@ -175,7 +174,8 @@ def run_clients(register_map, port: int, count: int) -> list:
     return outcomes
 
 
-def test_four_clients_at_once_each_report_what_the_drive_took():
+@pytest.mark.parametrize("attempt", range(3))      # each run interleaves the clients anew
+def test_four_clients_at_once_each_report_what_the_drive_took(attempt):
     register_map = load_register_map(INSPECTION)
     with SimDrive(register_map) as sim:
         outcomes = run_clients(register_map, sim.port, 4)

@@ -366,3 +366,44 @@ def test_the_joints_never_leave_their_limits():
         finally:
             c.close()
         assert len(sim.refused) + len(sim.taken) == 60 and len(sim.refused) > 30
+
+
+def test_random_requests_pipelined_each_get_one_well_formed_answer():
+    """300 random requests (seeded) in one burst on one connection: each answered once, in
+    order, with its function code or an exception of the standard codes; afterwards the joints
+    are within their limits and the drive answers as before."""
+    m = locked_map()
+    rng = np.random.default_rng(5)
+    requests = []
+    for t in range(300):
+        function = int(rng.choice([3, 6, 16, 16, int(rng.integers(1, 128))]))
+        if function == 3:
+            pdu = read(int(rng.integers(0, 40)), int(rng.integers(0, 130)))
+        elif function == 6:
+            pdu = struct.pack(">BHH", 6, int(rng.integers(0, 40)), int(rng.integers(0, 65536)))
+        elif function == 16:
+            count = int(rng.choice([13, int(rng.integers(1, 20))]))
+            address = 0 if count == 13 else int(rng.integers(0, 40))
+            pdu = write(address, rng.integers(0, 65536, count))
+        else:
+            pdu = bytes([function]) + rng.bytes(int(rng.integers(0, 10)))
+        requests.append((t, int(rng.choice([1, 1, 1, 0, 255, 7])), pdu))
+    lower, upper = np.rad2deg(m.robot.lower), np.rad2deg(m.robot.upper)
+    with SimDrive(m) as sim:
+        with socket.create_connection(("127.0.0.1", sim.port), timeout=TIMEOUT) as sock:
+            sock.sendall(struct.pack(">HHHB", 9999, 0, 6, 1) + struct.pack(">BHH", 6, 28, 1))
+            assert receive(sock)[0] == 9999                          # enabled: it moves
+            sock.sendall(b"".join(frame(t, u, pdu) for t, u, pdu in requests))
+            answers = [receive(sock) for _ in requests]
+        for (t, unit, pdu), answer in zip(requests, answers):
+            assert answer is not None and answer[:2] == (t, unit)
+            reply = answer[2]
+            if reply[0] & 0x80:
+                assert reply[0] == pdu[0] | 0x80 and len(reply) == 2
+                assert reply[1] in (1, 2, 3, 6, 11)
+            else:
+                assert reply[0] == pdu[0] in (3, 6, 16)
+        assert np.all(np.rad2deg(sim.position) >= lower - 1e-9)
+        assert np.all(np.rad2deg(sim.position) <= upper + 1e-9)
+        assert np.isfinite(sim.goal).all()
+        assert ask(sim.port, read(m.accepted, 1))[:2] == bytes([3, 2])

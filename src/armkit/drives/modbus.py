@@ -65,6 +65,7 @@ ACK_POLL = 0.001   # s
 # Consecutive reads that must agree before the client acts on an unexpected acknowledgement.
 CONFIRM_READS = 2
 DEVICE_BUSY = 6    # the exception a drive answers to a write while another client holds its lock
+ILLEGAL_VALUE = 3  # the exception a drive answers to a waypoint it refuses (outside its limits)
 
 
 def port_number(port: int) -> int:
@@ -154,7 +155,11 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
         ``waypoint 3, joint q2: 190 deg outside the limits -180..180 deg``.
     """
     robot = register_map.robot
-    q = joint_array(robot, q, "waypoints")
+    try:
+        q = joint_array(robot, q, "waypoints")
+    except InputError:
+        _name_non_finite(robot, q)            # which waypoint and joint, if that was it
+        raise
     if q.ndim == 1:
         q = q[None]
     if q.ndim != 2 or len(q) == 0:
@@ -181,7 +186,8 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
         k = int(np.argmax(dt <= 0))
         raise InputError(f"waypoint times: expected strictly increasing, found {t[k]:g} s then "
                          f"{t[k + 1]:g} s at waypoints {k} and {k + 1}")
-    speed = np.abs(np.diff(q, axis=0)) / dt[:, None]
+    with np.errstate(over="ignore"):          # a step over a denormal dt: inf, too fast
+        speed = np.abs(np.diff(q, axis=0)) / dt[:, None]
     too_fast = speed > robot.chain.velocity_limits
     if too_fast.any():
         k, i = np.argwhere(too_fast)[0]
@@ -190,6 +196,21 @@ def check_waypoints(register_map: RegisterMap, q: ArrayLike,
                          f"{register_map.robot.joint_units[i]}/s over the velocity limit {limit:.6g} "
                          f"{register_map.robot.joint_units[i]}/s")
     return q
+
+
+def _name_non_finite(robot, q) -> None:
+    """Raise an InputError naming the first non-finite waypoint value of q (N, n) or (n,)."""
+    try:
+        values = np.asarray(q, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        return
+    if values.ndim in (1, 2) and values.shape[-1] == robot.n:
+        values = values.reshape(-1, robot.n)
+        bad = np.argwhere(~np.isfinite(values))
+        if len(bad):
+            k, i = bad[0]
+            raise InputError(f"waypoint {k}, joint {robot.joint_names[i]}: expected a finite "
+                             f"value, found {values[k, i]}") from None
 
 
 class _Failed(Exception):
@@ -508,6 +529,9 @@ class DriveClient:
             cause = failed.cause
             if failed.code == DEVICE_BUSY and m.lock is not None:
                 cause = f"{cause}: {self._lock_text(self._lock_holder())}"
+            elif failed.code == ILLEGAL_VALUE:
+                cause = (f"{cause}: the drive refused the values it received (checked within "
+                         f"the limits here, so changed on the way or the drive's limits differ)")
             self._abandon()
             raise DriveError(cause, last, waypoint=k,
                              outcome_unknown=failed.unknown) from None

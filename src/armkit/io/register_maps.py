@@ -33,6 +33,7 @@ the field.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -40,7 +41,7 @@ from pydantic import Field, ValidationError
 
 from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.io.documents import StrictModel, read_text, read_yaml, validation_error
 from armkit.model import Robot
 from armkit.model.files import robot as load_robot_by_name
 
@@ -49,7 +50,9 @@ Order = Literal["big", "little"]
 Address = Annotated[int, Field(ge=0, le=65535, strict=True)]
 Word = Annotated[int, Field(ge=1, le=65535, strict=True)]
 # Bounds that no real register map comes near (123 joints of 8 fields fill about 1,000 values).
-MAX_FILE_BYTES = 1_000_000
+MAX_FILE_BYTES = 256_000
+QUOTED_OR_COMMENT = re.compile(r"'[^'\n]*'|\"(?:[^\"\\\n]|\\.)*\"|#[^\n]*")
+FLOW_BRACKETS = re.compile(r"[\[\]{}]")
 MAX_NODES = 10_000
 MAX_DEPTH = 8
 
@@ -61,7 +64,7 @@ class JointField(StrictModel):
     target: Address
     actual: Address | None = None
     type: DataType
-    scale: float = Field(1.0, gt=0, le=1e12, allow_inf_nan=False)
+    scale: float = Field(1.0, gt=0, le=1e12, allow_inf_nan=False, strict=True)
     word_order: Order | None = None
     byte_order: Order | None = None
 
@@ -121,6 +124,10 @@ def load_register_map(path: str | Path, robot: str | Path | Robot | None = None)
     if size > MAX_FILE_BYTES:
         raise ModelFileError(str(path), "", f"a register map of at most {MAX_FILE_BYTES} bytes",
                              f"{size} bytes")
+    line = _too_deep(read_text(path))
+    if line is not None:
+        raise ModelFileError(str(path), f"line {line}", f"fields nested at most {MAX_DEPTH} "
+                             "deep", "deeper nesting of [ ] or { }")
     try:
         document = read_yaml(path)
     except RecursionError:                     # the YAML parser recurses once per level
@@ -154,6 +161,22 @@ def parse_register_map(document: Any, path: str = "<register map>",
                        status.accepted, status.state, status.fault, status.fault_bit,
                        spec.readback, path, command.lock, command.reset, refusal.response,
                        refusal.fault_code)
+
+
+def _too_deep(text: str) -> int | None:
+    """The line (from 1) where [ ] and { } first nest deeper than MAX_DEPTH in a YAML text,
+    quoted strings and comments aside; None if they never do.
+
+    PyYAML's scanner takes time quadratic in this depth (5 s for 3,000 levels), so a few
+    kilobytes of brackets are refused before it sees them.
+    """
+    depth = 0
+    for number, line in enumerate(text.splitlines(), start=1):
+        for bracket in FLOW_BRACKETS.findall(QUOTED_OR_COMMENT.sub("", line)):
+            depth = depth + 1 if bracket in "[{" else max(depth - 1, 0)
+            if depth > MAX_DEPTH:
+                return number
+    return None
 
 
 def _check_size(document: Any, path: str) -> None:
