@@ -76,13 +76,15 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
     names = ["base"] + list(model.joint_names[:-1]) + ["tool"]
     frame_rows = [{"frame": name, **pose_view(T, units)} for name, T in zip(names, frames)]
     joints = _joint_rows(model, units)
+    collision = _collision_view(model, units)
     if as_json:
         return print_json({"name": model.name, "description": model.description,
                            "dof": model.n, "units": {"length": units.length,
                                                      "angle": units.angle},
                            "joints": joints,
                            "frames_at_zero": [{k: v for k, v in row.items() if k != "matrix"}
-                                              for row in frame_rows]})
+                                              for row in frame_rows],
+                           "collision": collision})
     stdout.print(f"[bold]{model.name}[/bold]  {model.n} joints {_kinds(model)}, "
                  f"file units {model.units.length}/{model.units.angle}")
     if model.description:
@@ -98,6 +100,27 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
     for row in frame_rows:
         table.add_row(row["frame"], _cell(row["position"]), _cell(row["rpy"]))
     stdout.print(table)
+    table = Table("link", f"a ({units.length})", f"b ({units.length})",
+                  f"radius ({units.length})", box=None, title_justify="left",
+                  title=f"collision capsules in link frames ({collision['source']})")
+    for c in collision["capsules"]:
+        table.add_row(str(c["link"]), _cell(c["a"]), _cell(c["b"]), _cell(c["radius"]))
+    stdout.print(table)
+    stdout.print("self-collision skipped between links: "
+                 + (", ".join(f"{i}-{j}" for i, j in collision["skip"]) or "none")
+                 + " (and between adjacent links)")
+
+
+def _collision_view(model: Robot, units: Units) -> dict:
+    """The arm's capsules (`armkit.planning.arm_geometry`) in `units`."""
+    from armkit.planning import arm_geometry
+
+    g = arm_geometry(model)
+    length = lambda x: units.length_from_si(np.round(x, 12) + 0.0)   # noqa: E731  (no -0, 1e-15)
+    return {"source": g.source, "skip": [list(p) for p in g.skip],
+            "capsules": [{"link": int(k), "a": length(a), "b": length(b),
+                          "radius": float(length(r))}
+                         for k, a, b, r in zip(g.link, g.a, g.b, g.radius)]}
 
 
 def _cell(value) -> str:

@@ -112,7 +112,7 @@ def default_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
         A.append((to_link[i + 1] @ a_body)[:3])
         B.append((to_link[i + 1] @ b_body)[:3])
     geometry = ArmGeometry(links, A, B, np.full(len(links), float(radius)), skip,
-                           f"default: segments between joint origins, radius {radius:g} m")
+                           "default: segments between joint origins")
     return _skip_touching(robot, geometry)
 
 

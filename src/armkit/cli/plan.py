@@ -1,0 +1,87 @@
+"""`armkit plan FILE.yaml`: a collision-free path and its waypoints, in the file's units."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.table import Table
+
+from armkit.cli.app import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder, print_json, stdout
+from armkit.errors import InputError
+from armkit.model import SI
+
+PLANNERS = ("rrtconnect", "rrt", "rrtstar")
+
+
+@app.command(name="plan")
+def plan_command(
+    file: Annotated[Path, typer.Argument(help="Planning file (.yaml): robot, obstacles, start, "
+                                              "goal or goal_pose, planner settings.")],
+    planner: Annotated[Optional[str], typer.Option(
+        help=f"One of {', '.join(PLANNERS)} (default: the file's, else rrtconnect).")] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Seed (default: the file's).")] = None,
+    waypoints: Annotated[Optional[int], typer.Option(
+        help="Resample the path to N waypoints evenly spaced in joint space.")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        help="Folder for the picture of the arm along the path.")] = None,
+    as_json: JsonFlag = False, si: SiFlag = False) -> None:
+    """Plan a collision-free path; exit 1 with the reason when none is found."""
+    from armkit.io.scene import read_planning_problem
+    from armkit.planning import CollisionChecker, arm_geometry, plan
+
+    if planner is not None and planner not in PLANNERS:
+        raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found {planner!r}")
+    if waypoints is not None and waypoints < 2:
+        raise InputError(f"--waypoints: expected a whole number >= 2, found {waypoints}")
+    if out is not None:
+        out = output_folder(out)
+    problem = read_planning_problem(file)
+    robot, units = problem.robot, (SI if si else problem.units)
+    settings = dict(problem.settings)
+    for key, value in (("planner", planner), ("seed", seed), ("waypoints", waypoints)):
+        if value is not None:
+            settings[key] = value
+    resolution = settings.pop("resolution", 0.005)
+    checker = CollisionChecker(robot, problem.scene, arm_geometry(robot, problem.radius),
+                               resolution=resolution)
+    result = plan(checker, problem.start, problem.goal, goal_pose=problem.goal_pose, **settings)
+    figure = None
+    if out is not None and result.success:
+        from armkit.report.planning import save_path_figure
+        figure = str(save_path_figure(checker, result.path, out, units))
+    q_units = [units.of_joint(r) for r in robot.chain.revolute]
+    convert = (lambda q: q) if si else robot.q_from_si   # noqa: E731
+    doc = {"robot": robot.name, "success": result.success, "reason": result.reason,
+           "planner": result.planner, "units": {"length": units.length, "angle": units.angle},
+           "joint_units": q_units, "resolution": float(units.length_from_si(resolution)),
+           "waypoints": convert(result.path) if result.success else [],
+           "planning_time_s": result.planning_time, "total_time_s": result.total_time,
+           "iterations": result.iterations, "states_checked": result.states_checked,
+           "length_before_shortcut": result.raw_length, "length": result.length,
+           "goals": convert(result.goals) if len(result.goals) else [], "figure": figure}
+    if as_json:
+        print_json(doc)
+    else:
+        _show(doc, robot)
+    if not result.success:
+        raise typer.Exit(EXIT_FAILED)
+
+
+def _show(doc: dict, robot) -> None:
+    if not doc["success"]:
+        stdout.print(f"no path: {doc['reason']}  ({doc['iterations']} iterations, "
+                     f"{doc['planning_time_s'] * 1e3:.3g} ms)")
+        return
+    stdout.print(f"{doc['planner']}: path found in {doc['planning_time_s'] * 1e3:.3g} ms "
+                 f"({doc['iterations']} iterations, {doc['states_checked']} states checked); "
+                 f"joint-space length {doc['length_before_shortcut']:.4g} -> {doc['length']:.4g}"
+                 f"; certified at {doc['resolution']:g} {doc['units']['length']}")
+    table = Table("#", *[f"{n} ({u})" for n, u in zip(robot.joint_names, doc["joint_units"])],
+                  box=None, title="waypoints", title_justify="left")
+    for i, q in enumerate(doc["waypoints"]):
+        table.add_row(str(i), *[f"{v:.6g}" for v in q])
+    stdout.print(table)
+    if doc["figure"]:
+        stdout.print(f"figure: {doc['figure']}")
