@@ -51,7 +51,7 @@ def test_units_in_metres_and_radians(tmp_path):
 def test_a_scene_file_beside_the_task(tmp_path):
     (tmp_path / "cell.scene.yaml").write_text(
         "units: {length: mm, angle: deg}\nobstacles:\n"
-        "  - {type: sphere, name: ball, xyz: [900, 0, 700], radius: 100}\n")
+        "  - {type: sphere, name: ball, center: [900, 0, 700], radius: 100}\n")
     doc = yaml.safe_load(DEMO)
     doc["scene"] = {"file": "cell.scene.yaml"}
     task = load_task(_write(tmp_path, yaml.safe_dump(doc)))
@@ -75,9 +75,9 @@ BAD = [
     ({"motion": {"speed": 2}}, "motion.speed", "less than or equal to 1"),
     ({"drive": {"host": "127.0.0.1", "port": 70000}}, "drive.port", "65535"),
     ({"drive": {"host": "127.0.0.1"}}, "drive.map", "register map"),
-    ({"scene": {"obstacles": [{"type": "box", "xyz": [0, 0, 0]}]}}, "scene.obstacles[0].size",
-     "a value for a box"),
-    ({"scene": {"obstacles": [{"type": "cone"}]}}, "scene.obstacles[0].type", "cone"),
+    ({"scene": {"obstacles": [{"type": "box", "xyz": [0, 0, 0]}]}}, "scene.obstacles[0]",
+     "min and max corners or size"),
+    ({"scene": {"obstacles": [{"type": "cone"}]}}, "scene.obstacles[0]", "cone"),
     ({"scene": {"file": "missing.scene.yaml"}}, "", "readable file"),
     ({"handeye": "result.yaml"}, "handeye", "not read yet"),
     ({"targte": {}}, "top level", "did you mean 'target'"),

@@ -145,7 +145,8 @@ class PlanningProblem:
     settings: dict = field(default_factory=dict)
 
 
-def _obstacle(o, units: Units):
+def obstacle_from_field(o, units: Units):
+    """An obstacle of a validated file (`Obstacle` field, file units) in SI."""
     length, angle = units.length_to_si, units.angle_to_si
     if isinstance(o, _BoxField):
         if o.size is None:
@@ -194,7 +195,7 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
     if spec.goal is not None and spec.goal_pose is not None:
         raise ModelFileError(path, "goal_pose", "either goal or goal_pose", "both")
     units = Units(spec.units.length, spec.units.angle)
-    obstacles = [_obstacle(o, units) for o in spec.obstacles]
+    obstacles = [obstacle_from_field(o, units) for o in spec.obstacles]
     if spec.scene is not None:
         obstacles += list(read_moveit_scene(Path(path).parent / spec.scene))
     scene = Scene(obstacles)

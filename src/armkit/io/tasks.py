@@ -9,7 +9,7 @@
     target: {xyz: [500, 400, 1400], rpy: [180, 0, 60]}     # the target as the camera sees it
     start: [0, 0, 0, 0]                  # where the simulated drive starts (joint values)
     scene:                               # obstacles in the base frame (and/or file: FILE)
-      obstacles:
+      obstacles:                         # as in scene files (armkit.io.scene)
         - {type: box, name: pillar, xyz: [900, 0, 800], size: [120, 120, 1600]}
     planner: {name: rrtconnect, seed: 1, time_limit: 5, resolution: 5}
     motion: {waypoints: 10, speed: 1.0}  # paper 1 sends 10 waypoints to the motors
@@ -35,6 +35,7 @@ from pydantic import Field, ValidationError, field_validator
 
 from armkit.errors import ArmkitError, ModelFileError
 from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.io.scene import Obstacle
 from armkit.model.robot import Units
 from armkit.spatial import pose_from_xyz_rpy
 
@@ -76,23 +77,9 @@ class TargetField(StrictModel):
     _check = field_validator("xyz", "rpy", "yaw")(_finite)
 
 
-class ObstacleField(StrictModel):
-    type: Literal["box", "sphere", "cylinder", "capsule"]
-    name: str = ""
-    xyz: Vector3 | None = None          # centre (box, sphere, cylinder)
-    rpy: Vector3 = [0.0, 0.0, 0.0]
-    size: Vector3 | None = None         # box edges
-    radius: float | None = Field(None, gt=0)
-    length: float | None = Field(None, gt=0)
-    a: Vector3 | None = None            # capsule ends
-    b: Vector3 | None = None
-
-    _check = field_validator("xyz", "rpy", "size", "radius", "length", "a", "b")(_finite)
-
-
 class SceneField(StrictModel):
-    file: str | None = None             # a scene file (its own units), relative to the task
-    obstacles: list[ObstacleField] = []
+    file: str | None = None             # a scene file (.yaml or MoveIt's .scene), relative
+    obstacles: list[Obstacle] = []      # as in scene files (`armkit.io.scene`)
 
 
 class PlannerField(StrictModel):
@@ -248,52 +235,13 @@ def _pose(xyz, rpy, units: Units, where: str, field: str) -> np.ndarray:
 
 
 def _scene(spec, units: Units, folder: Path, where: str):
-    from armkit.planning import Box, Capsule, Cylinder, Scene, Sphere
+    from armkit.io.scene import obstacle_from_field, read_scene
+    from armkit.planning import Scene
 
     if spec is None:
         return Scene()
-    obstacles = []
-    if spec.file is not None:
-        obstacles += load_scene_file(folder / spec.file).obstacles
-    for i, o in enumerate(spec.obstacles):
-        at = f"scene.obstacles[{i}]"
-        need = {"box": ("xyz", "size"), "sphere": ("xyz", "radius"),
-                "cylinder": ("xyz", "radius", "length"), "capsule": ("a", "b", "radius")}[o.type]
-        for name in need:
-            if getattr(o, name) is None:
-                raise ModelFileError(where, f"{at}.{name}", f"a value for a {o.type}", "nothing")
-        T = None if o.xyz is None else _pose(o.xyz, o.rpy, units, where, at)
-        si = {name: _length(getattr(o, name), units, where, f"{at}.{name}")
-              for name in ("size", "radius", "length", "a", "b") if getattr(o, name) is not None}
-        if o.type == "box":
-            obstacles.append(Box(si["size"], T, o.name))
-        elif o.type == "sphere":
-            obstacles.append(Sphere(T[:3, 3], float(si["radius"]), o.name))
-        elif o.type == "cylinder":
-            obstacles.append(Cylinder(float(si["radius"]), float(si["length"]), T, o.name))
-        else:
-            obstacles.append(Capsule(si["a"], si["b"], float(si["radius"]), o.name))
-    return Scene(tuple(obstacles))
-
-
-def load_scene_file(path: Path):
-    """A scene file: the task's ``scene`` section on its own, with its own units."""
-    document = read_yaml(path)
-    where = str(path)
-    if not isinstance(document, dict):
-        raise ModelFileError(where, "top level", "a mapping with units and obstacles",
-                             "nothing" if document is None else type(document).__name__)
-
-    class SceneFile(StrictModel):
-        units: UnitsField
-        obstacles: list[ObstacleField] = []
-
-    try:
-        spec = SceneFile.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(where, err, SceneFile) from None
-    return _scene(SceneField(obstacles=spec.obstacles),
-                  Units(spec.units.length, spec.units.angle), path.parent, where)
+    inline = Scene(tuple(obstacle_from_field(o, units) for o in spec.obstacles))
+    return inline if spec.file is None else read_scene(folder / spec.file) + inline
 
 
 def _register_map(path: Path, robot, where: str):
