@@ -43,7 +43,13 @@ class Task:
     Attributes
     ----------
     T_base_camera, T_camera_target : ndarray, (4, 4)
-        The camera's pose in the base frame; the target's pose as the camera sees it.
+        The camera's pose in the base frame; the target's pose as the camera sees it (None when
+        a point cloud gives it).
+    target_cloud : dict or None
+        A point cloud of the inlet (path, kind, radius m or None, units), searched by
+        `armkit.perception.detect_target` when the job runs.
+    mask : str or None
+        The IK task (a name of `armkit.kinematics.ik.task.NAMED_MASKS`); None: the robot's own.
     start : ndarray (n,) or None
         Where the simulated drive starts (a real drive reports where the arm is).
     scene : armkit.planning.Scene
@@ -65,7 +71,9 @@ class Task:
     robot: Robot
     units: Units
     T_base_camera: NDArray
-    T_camera_target: NDArray
+    T_camera_target: NDArray | None
+    target_cloud: dict | None = None
+    mask: str | None = None
     start: NDArray | None = None
     scene: object = None
     planner: str = "rrtconnect"
@@ -126,6 +134,7 @@ class JobResult:
     reason: str = ""
     stopped_at: str = ""
     T_base_target: NDArray | None = None
+    detection: object = None
     q_current: NDArray | None = None
     solutions: NDArray | None = None
     within_limits: NDArray | None = None
@@ -234,9 +243,10 @@ def _run(task: Task, result: JobResult, drive_map, host: str, port: int, tell) -
     from armkit.planning import CollisionChecker, arm_geometry
 
     robot = task.robot
-    result.T_base_target = _timed(result, "target", tell,
-                                  lambda: task.T_base_camera @ task.T_camera_target)
-    tell("target", "in the base frame")
+    if not _timed(result, "target", tell, lambda: _target(result)):
+        return result
+    tell("target", "in the base frame" if result.detection is None else
+         f"found in the cloud ({result.detection.reason}), in the base frame")
     client = DriveClient(drive_map, host, port, timeout=task.drive_timeout)
     try:
         try:
@@ -273,6 +283,25 @@ def _run(task: Task, result: JobResult, drive_map, host: str, port: int, tell) -
         client.close()
 
 
+def _target(result: JobResult) -> bool:
+    """The target in the base frame: the camera's pose of it, or the inlet found in a cloud."""
+    task = result.task
+    if task.target_cloud is None:
+        result.T_base_target = task.T_base_camera @ task.T_camera_target
+        return True
+    from armkit.perception import detect_target
+
+    c = task.target_cloud
+    found = detect_target(c["path"], kind=c["kind"], radius=c["radius"], units=c["units"],
+                          T_base_sensor=task.T_base_camera)
+    result.detection = found
+    if not found.success:
+        result.fail("target", f"no target in the cloud: {found.reason}")
+        return False
+    result.T_base_target = np.asarray(found.T_base_target)
+    return True
+
+
 def _choose(result: JobResult, checker) -> bool:
     """Every IK solution of the target, the collision-free ones, the nearest to the arm."""
     from armkit.kinematics.ik import ik, ik_solutions
@@ -281,13 +310,13 @@ def _choose(result: JobResult, checker) -> bool:
     task, robot = result.task, result.task.robot
     T = result.T_base_target
     try:
-        sols = ik_solutions(robot, T)
+        sols = ik_solutions(robot, T, mask=task.mask)
         q_all, inside = sols.q, np.asarray(sols.within_limits, bool)
-    except InputError:         # no closed form for this arm: numeric solutions from many starts
-        q_all = goals_from_pose(robot, T, starts=16, seed=task.seed)
+    except InputError:         # no closed form for this task: numeric solutions from many starts
+        q_all = goals_from_pose(robot, T, mask=task.mask, starts=16, seed=task.seed)
         inside = np.ones(len(q_all), bool)
     if len(q_all) == 0:
-        verdict = ik(robot, T, result.q_current)
+        verdict = ik(robot, T, result.q_current, mask=task.mask)
         return bool(result.fail("ik", f"no IK solution: {verdict.reason}") and False)
     result.solutions, result.within_limits = q_all.reshape(-1, robot.n), inside
     result.clearance = checker.clearance(result.solutions)

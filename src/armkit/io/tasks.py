@@ -16,9 +16,14 @@
     drive: {host: 192.0.2.10, port: 502, map: drive.map.yaml}   # omitted: the simulated drive
     report: task-report                  # the report's folder (the CLI's --out wins)
 
-Places kept for what comes next: ``camera`` will also take a hand-eye result file
-(``handeye: FILE``), and ``target`` a point cloud (``cloud: FILE``). Until then they are refused
-with a message that says so.
+``camera`` may instead name a file: a camera-to-base file or a hand-eye result
+(`armkit.io.camera`); an eye-in-hand result also needs the joints the arm had when the camera
+measured (``camera: {file: handeye.yaml, q: [...]}``). ``target`` may instead be a point cloud of
+the inlet, found by `armkit.perception.detect_target` when the job runs::
+
+    target: {cloud: scan.pcd, kind: pipe, radius: 40, mask: position}
+
+``mask`` names the IK task (default: the robot's own; ``position`` for a cloud).
 
 Every mistake is one `ModelFileError`: file, field path, what was expected, what was found,
 with "did you mean" for a misspelled key.
@@ -65,16 +70,29 @@ class PoseField(StrictModel):
     _check = field_validator("xyz", "rpy")(_finite)
 
 
-class CameraField(PoseField):
-    """The camera's pose in the base frame."""
+class CameraField(StrictModel):
+    """The camera's pose in the base frame, or a file: a camera-to-base file or a hand-eye
+    result (`armkit.io.camera`); an eye-in-hand camera also needs the joints it measured at."""
+
+    xyz: Vector3 | None = None
+    rpy: Vector3 = [0.0, 0.0, 0.0]
+    file: str | None = None
+    q: list[float] | None = None
+
+    _check = field_validator("xyz", "rpy", "q")(_finite)
 
 
 class TargetField(StrictModel):
-    xyz: Vector3
+    xyz: Vector3 | None = None
     rpy: Vector3 | None = None
     yaw: float | None = None
+    cloud: str | None = None            # a point cloud of the inlet (armkit.io.clouds)
+    kind: Literal["pipe", "hole"] = "pipe"
+    radius: float | None = Field(None, gt=0)          # the inlet's, length units; else fitted
+    cloud_units: Literal["mm", "m"] | None = None     # when the cloud file declares none
+    mask: str | None = None             # the IK task: position, position+yaw, pose, ...
 
-    _check = field_validator("xyz", "rpy", "yaw")(_finite)
+    _check = field_validator("xyz", "rpy", "yaw", "radius")(_finite)
 
 
 class SceneField(StrictModel):
@@ -110,7 +128,6 @@ class TaskFile(StrictModel):
     units: UnitsField
     robot: str
     camera: CameraField | None = None
-    handeye: str | None = None
     target: TargetField
     start: list[float] | None = None
     scene: SceneField | None = None
@@ -143,19 +160,29 @@ def parse_task(document: Any, path: str | Path = "<task>"):
         raise validation_error(where, err, TaskFile) from None
     folder = Path(path).parent if where != "<task>" else Path(".")
     units = Units(spec.units.length, spec.units.angle)
-    if spec.handeye is not None:
-        raise ModelFileError(where, "handeye", "a camera pose (camera: {xyz, rpy}); hand-eye "
-                             "result files are not read yet", repr(spec.handeye))
     if spec.camera is None:
         raise ModelFileError(where, "camera", "the camera's pose in the base frame "
-                             "({xyz, rpy})", "nothing")
+                             "({xyz, rpy}) or a camera file ({file})", "nothing")
     robot = _robot(spec.robot, folder, where)
-    T_base_camera = _pose(spec.camera.xyz, spec.camera.rpy, units, where, "camera")
-    target = spec.target
-    if target.rpy is not None and target.yaw is not None:
-        raise ModelFileError(where, "target", "rpy or yaw, not both", "both")
-    rpy = target.rpy if target.rpy is not None else [0.0, 0.0, target.yaw or 0.0]
-    T_camera_target = _pose(target.xyz, rpy, units, where, "target")
+    T_base_camera = _camera(spec.camera, robot, units, folder, where)
+    target, cloud, mask = spec.target, None, _mask(spec.target.mask, where)
+    if target.cloud is not None:
+        if any(v is not None for v in (target.xyz, target.rpy, target.yaw)):
+            raise ModelFileError(where, "target", "a cloud or a pose (xyz, rpy or yaw), not "
+                                 "both", "both")
+        cloud = {"path": folder / target.cloud, "kind": target.kind,
+                 "radius": None if target.radius is None else float(
+                     units.length_to_si(target.radius)), "units": target.cloud_units}
+        T_camera_target = None
+        mask = mask or "position"
+    else:
+        if target.xyz is None:
+            raise ModelFileError(where, "target.xyz", "the target's position as the camera "
+                                 "sees it (or cloud: FILE)", "nothing")
+        if target.rpy is not None and target.yaw is not None:
+            raise ModelFileError(where, "target", "rpy or yaw, not both", "both")
+        rpy = target.rpy if target.rpy is not None else [0.0, 0.0, target.yaw or 0.0]
+        T_camera_target = _pose(target.xyz, rpy, units, where, "target")
     start = None
     if spec.start is not None:
         if len(spec.start) != robot.n:
@@ -177,8 +204,8 @@ def parse_task(document: Any, path: str | Path = "<task>"):
         raise ModelFileError(where, "drive.map", "the drive's register map file", "nothing")
     return Task(
         name=spec.name or Path(where).stem, robot=robot, units=units,
-        T_base_camera=T_base_camera, T_camera_target=T_camera_target,
-        start=start, scene=scene, planner=p.name, seed=p.seed,
+        T_base_camera=T_base_camera, T_camera_target=T_camera_target, target_cloud=cloud,
+        mask=mask, start=start, scene=scene, planner=p.name, seed=p.seed,
         time_limit=p.time_limit, max_iterations=p.max_iterations,
         resolution=None if p.resolution is None else float(units.length_to_si(p.resolution)),
         radius=None if p.radius is None else float(units.length_to_si(p.radius)),
@@ -213,6 +240,42 @@ def _robot(name: str, folder: Path, where: str):
     except ArmkitError as err:
         raise ModelFileError(where, "robot", "a built-in robot name or a robot file",
                              f"{name!r} ({err})") from None
+
+
+def _camera(spec: CameraField, robot, units: Units, folder: Path, where: str) -> np.ndarray:
+    """T_base_camera from a pose, or from a camera file (a fixed mount or a hand-eye result)."""
+    from armkit.calibration import camera_to_base
+    from armkit.io.camera import read_camera_mount
+
+    if (spec.xyz is None) == (spec.file is None):
+        raise ModelFileError(where, "camera", "a pose (xyz, rpy) or a file, one of them",
+                             "both" if spec.file else "neither")
+    if spec.file is None:
+        if spec.q is not None:
+            raise ModelFileError(where, "camera.q", "joint values only with an eye-in-hand "
+                                 "hand-eye result file", "a fixed camera pose")
+        return _pose(spec.xyz, spec.rpy, units, where, "camera")
+    mount = read_camera_mount(folder / spec.file)
+    if mount.kind != "eye_in_hand":
+        if spec.q is not None:
+            raise ModelFileError(where, "camera.q", f"no joint values for a {mount.kind} "
+                                 "camera (it does not move with the arm)", "some")
+        return camera_to_base(mount)
+    if spec.q is None or len(spec.q) != robot.n:
+        raise ModelFileError(where, "camera.q", f"the {robot.n} joint values the arm had when "
+                             "the camera (on its gripper) measured", "none" if spec.q is None
+                             else f"{len(spec.q)}")
+    from armkit.kinematics import fk
+    return camera_to_base(mount, fk(robot, _joint_si(spec.q, robot, units)))
+
+
+def _mask(name: str | None, where: str) -> str | None:
+    from armkit.kinematics.ik.task import NAMED_MASKS
+
+    if name is not None and name not in NAMED_MASKS:
+        raise ModelFileError(where, "target.mask", f"one of {', '.join(NAMED_MASKS)}",
+                             repr(name))
+    return name
 
 
 def _joint_si(values: list[float], robot, units: Units) -> np.ndarray:

@@ -62,6 +62,7 @@ def summary(result: JobResult) -> dict:
         "stopped_at": result.stopped_at or None, "drive": result.drive,
         "target": {"in_camera": _pose(task.T_camera_target, u),
                    "in_base": _pose(result.T_base_target, u)},
+        "detection": None if result.detection is None else _detection(result.detection, u),
         "q_current": _q(robot, result.q_current),
         "ik": None if result.solutions is None else {
             "solutions": _q(robot, result.solutions),
@@ -91,6 +92,18 @@ def summary(result: JobResult) -> dict:
         "timings_s": {k: round(v, 4) for k, v in result.timings.items()},
     }
     return doc
+
+
+def _detection(found, units) -> dict:
+    """What the cloud search found, in the task's units."""
+    return {"cloud": found.source, "success": bool(found.success), "reason": found.reason,
+            "kind": found.kind, "in_sensor": _pose(found.T_sensor_target, units)
+            if found.success else None,
+            f"radius_{units.length}": _num(units.length_from_si(found.radius), 3)
+            if found.success else None, "radius_known": bool(found.radius_known),
+            "wall_inliers": int(found.plane_inliers), "cluster_size": int(found.cluster_size),
+            f"fit_rms_{units.length}": _num(units.length_from_si(found.fit_rms), 4),
+            "points_dropped": int(found.dropped)}
 
 
 def _table(header: list[str], rows: list[list], chosen: int | None = None,
@@ -214,11 +227,19 @@ def _page(result: JobResult, doc: dict, figures, view_div: str) -> str:
              "<h2>The motion in 3-D</h2>",
              '<p class="note">Links as their collision capsules, obstacles in red; drag to '
              "turn, scroll to zoom, play/pause and the slider below the view.</p>", view_div]
-    target = doc["target"]
+    target = dict(doc["target"])
+    if doc["detection"] is not None:
+        target["in_sensor"] = doc["detection"]["in_sensor"]
     parts += ["<h2>Target</h2>", _table(
         ["frame", f"x, y, z ({u.length})", f"roll, pitch, yaw ({u.angle})"],
         [[k.replace("_", " "), ", ".join(f"{v:.2f}" for v in p["xyz"]),
           ", ".join(f"{v:.2f}" for v in p["rpy"])] for k, p in target.items() if p], left=1)]
+    if doc["detection"] is not None:
+        d = doc["detection"]
+        parts += [f'<p class="note">Found in the point cloud {html.escape(str(d["cloud"]))}: '
+                  f'{html.escape(d["reason"])}; wall inliers {d["wall_inliers"]}, cluster '
+                  f'{d["cluster_size"]} points, circle fit RMS '
+                  f'{d[f"fit_rms_{u.length}"]} {u.length}.</p>']
     if result.solutions is not None:
         rows = [[i + 1, *[f"{v:.3f}" for v in q], "yes" if lim else "no",
                  "yes" if free else "no", _fmt(u.length_from_si(c))]
