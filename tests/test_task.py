@@ -136,3 +136,26 @@ def test_each_example_obstacle_blocks_the_straight_motion(name):
     assert (checker.clearance(line) <= 0).any()
     dense = result.trajectory.evaluate(np.linspace(0, result.trajectory.duration, 40001))
     assert checker.clearance(dense).min() > 0
+
+
+def test_a_target_found_in_a_point_cloud():
+    task = load_task(EXAMPLES / "water_supply_lidar.task.yaml")
+    result = run_task(task)
+    assert result.success, result.reason
+    assert result.detection.success
+    np.testing.assert_allclose(result.T_base_target, result.detection.T_base_target)
+    # The tool reaches the inlet's centre (position task) within the drive's resolution.
+    p = armkit.fk(task.robot, result.q_final)[:3, 3]
+    assert np.linalg.norm(p - result.T_base_target[:3, 3]) <= result.resolution
+
+
+def test_a_cloud_without_an_inlet_is_a_reason(tmp_path):
+    flat = tmp_path / "wall.npy"
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(-0.5, 0.5, (20_000, 2))
+    np.save(flat, np.c_[xy[:, 0], np.full(len(xy), 1.2), xy[:, 1]])
+    task = replace(load_task(EXAMPLES / "water_supply_lidar.task.yaml"),
+                   target_cloud={"path": flat, "kind": "pipe", "radius": None, "units": "m"})
+    result = run_task(task)
+    assert not result.success and result.stopped_at == "target"
+    assert result.reason.startswith("no target in the cloud: ") and result.sent is None

@@ -48,6 +48,32 @@ def test_units_in_metres_and_radians(tmp_path):
     np.testing.assert_allclose(task.start, [0.05, 0, 0.5, -0.5])
 
 
+def test_a_camera_file_fixed_or_on_the_gripper(tmp_path):
+    (tmp_path / "fixed.yaml").write_text("units: {length: mm, angle: deg}\n"
+                                         "camera_to_base: {xyz: [600, -200, 2200], "
+                                         "rpy: [180, 0, 90]}\n")
+    doc = yaml.safe_load(DEMO)
+    doc["camera"] = {"file": "fixed.yaml"}
+    task = load_task(_write(tmp_path, yaml.safe_dump(doc)))
+    np.testing.assert_allclose(task.T_base_camera, load_task(_write(tmp_path, DEMO)).T_base_camera,
+                               atol=1e-12)
+    # A camera on the gripper (eye-in-hand result): T_base_camera = FK(q when it measured) X.
+    (tmp_path / "hand.yaml").write_text(
+        "units: {length: mm, angle: deg}\nhandeye:\n  mode: eye_in_hand\n"
+        "  X: {xyz: [0, 50, 100], rpy: [180, 0, 0]}\n")
+    doc["camera"] = {"file": "hand.yaml", "q": [100, 10, 20, 30]}
+    task = load_task(_write(tmp_path, yaml.safe_dump(doc)))
+    import armkit
+    from armkit.spatial import pose_from_xyz_rpy
+    robot = armkit.robot("water_supply")
+    expected = armkit.fk(robot, robot.q_to_si([100, 10, 20, 30])) @ pose_from_xyz_rpy(
+        [0, 0.05, 0.1], [np.pi, 0, 0])
+    np.testing.assert_allclose(task.T_base_camera, expected, atol=1e-12)
+    doc["camera"] = {"file": "hand.yaml"}
+    with pytest.raises(ModelFileError, match="camera.q: expected the 4 joint values"):
+        load_task(_write(tmp_path, yaml.safe_dump(doc)))
+
+
 def test_a_scene_file_beside_the_task(tmp_path):
     (tmp_path / "cell.scene.yaml").write_text(
         "units: {length: mm, angle: deg}\nobstacles:\n"
@@ -79,7 +105,12 @@ BAD = [
      "min and max corners or size"),
     ({"scene": {"obstacles": [{"type": "cone"}]}}, "scene.obstacles[0]", "cone"),
     ({"scene": {"file": "missing.scene.yaml"}}, "", "readable file"),
-    ({"handeye": "result.yaml"}, "handeye", "not read yet"),
+    ({"camera": {"file": "nowhere.yaml"}}, "", "readable file"),
+    ({"camera": {"xyz": [0, 0, 0], "file": "mount.yaml"}}, "camera", "one of them"),
+    ({"camera": {"xyz": [0, 0, 0], "q": [0, 0, 0, 0]}}, "camera.q", "eye-in-hand"),
+    ({"target": {"cloud": "scan.pcd", "xyz": [0, 0, 0]}}, "target", "not both"),
+    ({"target": {"rpy": [0, 0, 0]}}, "target.xyz", "cloud: FILE"),
+    ({"target": {"xyz": [0, 0, 0], "mask": "elbow"}}, "target.mask", "position+yaw"),
     ({"targte": {}}, "top level", "did you mean 'target'"),
 ]
 
@@ -94,8 +125,8 @@ def test_each_mistake_names_its_field(tmp_path, change, field, words):
     text = str(err.value)
     assert "\n" not in text
     assert field in text and words in text
-    assert ("missing.scene.yaml" in text) if "scene" in str(change) and "missing" in str(
-        change) else str(path) in text
+    named = [f for f in ("missing.scene.yaml", "nowhere.yaml") if f in str(change)]
+    assert (named[0] if named else str(path)) in text      # the file at fault
 
 
 @pytest.mark.parametrize("text", ["", "[1, 2]", "just text", "a: [", "\xff"])
