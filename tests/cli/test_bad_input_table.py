@@ -29,7 +29,7 @@ ROW_SECONDS = 60        # a row slower than this has hung: every one fails befor
 # (see `helper_files`), made by the process that runs the table.
 ROWS: list[tuple[tuple[str, ...], str]] = [
     # the group itself
-    (("nosuch",), "COMMAND: expected one of demo, send, sim-drive, robots, show, fk, ik"),
+    (("nosuch",), "COMMAND: expected one of robots, show, fk, handeye, calibrate, accuracy"),
     (("fk0", "ur5"), "did you mean fk?"),
     (("--bogus",), "--bogus: expected an option of `armkit` (--help), found an unknown option"),
     # robots
@@ -192,6 +192,33 @@ ROWS: list[tuple[tuple[str, ...], str]] = [
     (("traj", "ur5", *P2P[:1], "--goal=1,0,0,0,0,0", "--sync", "diagonal"), "sync"),
     (("traj", "ur5", *P2P[:1], "--goal=1,0,0,0,0,0", "--out", "/dev/null/x"),
      "--out: expected a folder armkit can write"),
+    # run, demo, view (the end-to-end job)
+    (("run",), "TASK: expected a value, found none"),
+    (("run", "{tmp}/missing.yaml"), "{tmp}/missing.yaml: expected a readable file"),
+    (("run", "{tmp}/broken.yaml"), "{tmp}/broken.yaml: line "),
+    (("run", "{tmp}/empty.yaml"), "{tmp}/empty.yaml: top level: expected a mapping of task"),
+    (("run", "x.yaml", "--bogus"), "--bogus: expected an option of `armkit run`"),
+    (("demo", "extra"), "armkit demo: expected no more arguments, found 'extra'"),
+    (("demo", "--bogus"), "--bogus: expected an option of `armkit demo`"),
+    (("demo", "--out", "/dev/null/x"), "--out: expected a folder armkit can write"),
+    (("view", "ur5", "0", "0"), "Q: expected 6 joint values for ur5, found 2"),
+    (("view", "ur5", "nan", "0", "0", "0", "0", "0"), "Q: expected a finite number"),
+    (("view", "ur5", "1e308", "0", "0", "0", "0", "0"), "Q: expected a number from -1e+09"),
+    (("view", LONG), "robot: expected a built-in name or a robot file, found a name of 300"),
+    (("view", "ur5", "--out", "view.png"), "--out: expected an .html file, found view.png"),
+    (("view", "ur5", "--out", "/dev/null/v.html"), "--out: expected a folder armkit can write"),
+    # plan, calibration, detect (their own tests hold their full tables)
+    (("plan", "{tmp}/missing.yaml"), "{tmp}/missing.yaml: expected a readable file"),
+    (("plan", "x.yaml", "--bogus"), "--bogus: expected an option of `armkit plan`"),
+    (("handeye", "{tmp}/missing.yaml"), "{tmp}/missing.yaml: expected a readable file"),
+    (("handeye", "x.yaml", "--bogus"), "--bogus: expected an option of `armkit handeye`"),
+    (("calibrate", "ur5", "{tmp}/missing.csv"), "{tmp}/missing.csv: expected a readable file"),
+    (("calibrate", LONG, "x.csv"), "robot: expected a built-in name or a robot file, found "
+                                   "'xxxx"),
+    (("accuracy", "{tmp}/missing.csv"), "{tmp}/missing.csv: expected a readable file"),
+    (("accuracy", "x.csv", "--bogus"), "--bogus: expected an option of `armkit accuracy`"),
+    (("detect", "{tmp}/missing.pcd"), "{tmp}/missing.pcd: expected a readable file"),
+    (("detect", "{tmp}/wp.csv", "--bogus"), "--bogus: expected an option of `armkit detect`"),
     # send
     (("send", "{tmp}/wp.csv"), "--map: expected a value, found none"),
     (("send", "{tmp}/missing.csv", "--map", MAP), "{tmp}/missing.csv: expected a readable file"),

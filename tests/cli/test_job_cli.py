@@ -121,8 +121,8 @@ def test_an_unreachable_target_exits_1_with_a_report_that_says_so(tmp_path):
 @pytest.mark.parametrize("args, words", [
     (["run", "nowhere.yaml"], "nowhere.yaml"),
     (["run", str(EXAMPLES / "water_supply.task.yaml"), "--out", "/proc/armkit"], "--out"),
-    (["view", "ur5", "0", "0"], "expected 6"),
-    (["view", "ur5", "0", "0", "0", "0", "0", "x"], "q[5]"),
+    (["view", "ur5", "0", "0"], "Q: expected 6 joint values for ur5, found 2"),
+    (["view", "ur5", "0", "0", "0", "0", "0", "x"], "Q: expected a number"),
     (["view", "ur5", "--out", "view.png"], "--out"),
     (["view", "nobot"], "nobot"),
 ])

@@ -81,21 +81,6 @@ def test_a_bad_robot_file_names_file_and_field(tmp_path):
     assert f"{path}: joints[0].a: expected a valid number" in result.stderr
 
 
-def test_demo_runs_the_job_and_says_what_is_not_built(tmp_path):
-    result = run("demo", "--out", str(tmp_path), "--json")
-    assert result.exit_code == 0, result.output
-    doc = json.loads(result.stdout)
-    assert doc["robot"] == "water_supply" and doc["ik"]["success"]
-    np.testing.assert_allclose(doc["target"]["in_base"]["position"], [1000, 300, 800], atol=1e-9)
-    assert len(doc["waypoints"]["t"]) == 10 and doc["drive"]["last_accepted"] == 9
-    robot = armkit.robot("water_supply")
-    reached = armkit.fk(robot, robot.q_to_si(doc["waypoints"]["q"][-1]))
-    np.testing.assert_allclose(reached[:3, 3] * 1000, [1000, 300, 800], atol=1e-6)
-    assert all((tmp_path / name).is_file() for name in ("demo_joint_motion.png",
-                                                         "demo_tool_motion.png"))
-    assert any("planning" in step for step in doc["not_built"])
-
-
 def test_the_real_command_end_to_end():
     env = {**os.environ, "COLUMNS": "120"}
     done = subprocess.run([sys.executable, "-m", "armkit", "fk", "ur5", "0", "-90", "0", "-90",

@@ -246,13 +246,7 @@ def mutate_waypoints(text: str, rng: np.random.Generator) -> bytes:
     return bytes(data)
 
 
-@pytest.mark.parametrize("suffix", [
-    "csv",
-    pytest.param("json", marks=pytest.mark.xfail(
-        raises=AssertionError, strict=False,
-        reason="the JSON waypoint reader (cli/drives.py, the CLI's) lets OverflowError out "
-               "for an integer too large for a float")),
-])
+@pytest.mark.parametrize("suffix", ["csv", "json"])
 def test_fuzzed_waypoint_files(tmp_path, suffix):
     rng = np.random.default_rng(SEED + 1 + (suffix == "json"))
     runner = CliRunner()

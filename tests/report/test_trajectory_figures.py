@@ -56,12 +56,22 @@ def _dashed_levels(ax) -> list[float]:
                   if line.get_linestyle() == "--")
 
 
-def test_the_demo_joint_figure_draws_the_velocity_limit_the_lift_reaches():
-    from armkit.task import run_demo
+def _to_the_inlet():
+    """The water-supply arm's quintic from rest to the inlet at (1000, 300, 800) mm, yaw 30 deg
+    (the nearest solution), as short as its limits allow."""
+    from armkit.spatial import pose_from_xyz_rpy
 
-    report = run_demo()
-    robot = report.robot
-    fig = motion_figure(robot, report.trajectory)
+    robot = armkit.robot("water_supply")
+    q0 = np.array([0.05, 0.0, 0.5, -0.5])
+    sols = armkit.ik_solutions(robot, pose_from_xyz_rpy([1.0, 0.3, 0.8], [0, 0, np.pi / 6]))
+    qf = sols.q[np.argmin(np.linalg.norm(sols.q - q0, axis=1))]
+    return robot, armkit.quintic(q0, qf, vmax=robot.velocity_limits,
+                                 amax=robot.acceleration_limits)
+
+
+def test_the_inlet_joint_figure_draws_the_velocity_limit_the_lift_reaches():
+    robot, trajectory = _to_the_inlet()
+    fig = motion_figure(robot, trajectory)
     axes = np.array(fig.axes).reshape(robot.n, 4)
     # The quintic is as short as the lift's 200 mm/s allows: its peak touches the limit.
     assert _dashed_levels(axes[0, 1]) == [pytest.approx(200.0)]
@@ -71,11 +81,9 @@ def test_the_demo_joint_figure_draws_the_velocity_limit_the_lift_reaches():
 
 
 def test_the_tool_figure_has_a_legend_and_draws_the_yaw_of_a_yaw_task():
-    from armkit.task import run_demo
-
-    report = run_demo()
-    motion = tool_motion(report.robot, report.trajectory.sample_uniform(200))
-    fig = tool_figure(report.robot, {"quintic": motion}, yaw=True)
+    robot, trajectory = _to_the_inlet()
+    motion = tool_motion(robot, trajectory.sample_uniform(200))
+    fig = tool_figure(robot, {"quintic": motion}, yaw=True)
     assert len(fig.axes) == 4
     assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["x", "y", "z"]
     assert fig.axes[3].get_ylabel() == "tool yaw (deg)"

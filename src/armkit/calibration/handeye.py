@@ -453,8 +453,18 @@ def handeye(robot_poses: ArrayLike, camera_poses: ArrayLike, mode: Mode = "eye_i
 
     Example
     -------
-    >>> result = handeye(G, C)          # G: (N, 4, 4) T_base_gripper, C: T_camera_target
-    >>> result.X                        # T_gripper_camera
+    A camera on the gripper (X = T_gripper_camera) sees a fixed target (W = T_base_target) from
+    eight poses, so that G_i X C_i = W:
+
+    >>> from armkit.spatial import invert, pose_from_xyz_rpy
+    >>> rng = np.random.default_rng(0)
+    >>> X = pose_from_xyz_rpy([0.05, 0.0, 0.1], [0.1, 0.2, 0.3])
+    >>> W = pose_from_xyz_rpy([1.0, 0.2, 0.0], [0.0, 0.0, 1.0])
+    >>> G = pose_from_xyz_rpy(rng.uniform(-0.5, 0.5, (8, 3)), rng.uniform(-1, 1, (8, 3)))
+    >>> C = invert(X) @ invert(G) @ W
+    >>> result = handeye(G, C)
+    >>> result.success, bool(np.allclose(result.X, X, atol=1e-9))
+    (True, True)
     """
     G, C = _checked(robot_poses, camera_poses, mode, method)
     N = len(G)

@@ -10,6 +10,8 @@ from typing import Annotated
 import typer
 
 from armkit.cli.app import EXIT_FAILED, NUMBERS, JsonFlag, app, output_folder, print_json, stdout
+from armkit.cli.robots import RobotArg
+from armkit.cli.values import load_robot, number
 
 STEP_NAMES = {"target": "target to the base frame", "drive": "the arm's joints from the drive",
               "ik": "inverse kinematics", "plan": "collision-free path",
@@ -77,36 +79,25 @@ def demo(out: Annotated[Path, typer.Option("--out", help="Folder for the report.
 
 
 @app.command(context_settings=NUMBERS)
-def view(robot: Annotated[str, typer.Argument(help="Built-in name or robot file.")],
-         q: Annotated[list[str] | None, typer.Argument(
-             help="Joint values in the file's units (default: zero, or the nearest limit).")]
-         = None,
+def view(robot: RobotArg,
+         q: Annotated[list[float] | None, typer.Argument(
+             help="Joint values in the robot file's units (default: zero, or the nearest limit).",
+             metavar="[Q...]", parser=number())] = None,
          out: Annotated[Path, typer.Option("--out", help="The HTML file to write.")] = Path(
              "armkit-view.html")) -> None:
     """Write an offline interactive 3-D view of a robot: links as collision capsules, frames."""
     import numpy as np
 
     from armkit.errors import InputError
-    from armkit.model.files import robot as load
     from armkit.report.view import robot_view, write_view
 
-    model = load(robot)
-    if q:
-        values = []
-        for i, text in enumerate(q):
-            try:
-                values.append(float(text))
-            except ValueError:
-                raise InputError(f"q[{i}]: expected a number, found {text!r}") from None
-        if len(values) != model.n or not np.isfinite(values).all():
-            raise InputError(f"q: expected {model.n} finite joint values for {model.name}, "
-                             f"found {len(values)}")
-        q_si = model.q_to_si(values)
-    else:
-        q_si = np.clip(0.0, model.lower, model.upper)
+    model = load_robot(robot)
+    if q and len(q) != model.n:
+        raise InputError(f"Q: expected {model.n} joint values for {model.name}, found {len(q)}")
     if out.suffix.lower() not in (".html", ".htm"):
         raise InputError(f"--out: expected an .html file, found {out}")
-    output_folder(out.parent if str(out.parent) else Path("."))
+    q_si = model.q_to_si(q) if q else np.clip(0.0, model.lower, model.upper)
+    output_folder(out.parent, "--out")
     write_view(robot_view(model, q_si, title=f"{model.name} at q = "
                           f"{np.round(model.q_from_si(q_si), 3).tolist()}"), out)
     stdout.print(f"view: {out}")

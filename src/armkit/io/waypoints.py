@@ -117,6 +117,9 @@ def _json_waypoints(text: str, path: str, robot: Robot):
         t = None if t is None else np.array(t, dtype=float)
     except (TypeError, ValueError):
         raise ModelFileError(path, "q", "rows of numbers", "something else") from None
+    except OverflowError:                  # an integer beyond float's range, 1e309 and up
+        raise ModelFileError(path, "q", "numbers of a float's range", "an integer of more "
+                             "than 308 digits") from None
     for name, values in (("q", q), ("t", t)):
         if values is not None and not np.isfinite(values).all():
             where = np.argwhere(~np.isfinite(values))[0]

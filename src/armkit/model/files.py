@@ -492,8 +492,14 @@ def robot(name_or_path: str | Path | Robot) -> Robot:
     if text in robots():
         with resources.as_file(_builtin_dir() / f"{text}.yaml") as path:
             return load_robot(path)
-    if Path(text).is_file():
+    try:
+        is_file = Path(text).is_file()
+    except (OSError, ValueError) as err:       # too long for a file name, a NUL byte, ...
+        raise InputError(f"robot: expected a built-in name or a robot file, found "
+                         f"{found_text(text)} ({getattr(err, 'strerror', None) or err})") from None
+    if is_file:
         return load_robot(text)
     hint = difflib.get_close_matches(text, robots(), n=1)
     raise InputError(f"robot: expected a built-in name ({', '.join(robots())}) or a robot file, "
-                     f"found {text!r}" + (f" (did you mean {hint[0]!r}?)" if hint else ""))
+                     f"found {found_text(text)}" + (f" (did you mean {hint[0]!r}?)" if hint
+                                                    else ""))
