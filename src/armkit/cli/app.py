@@ -23,12 +23,11 @@ from armkit.cli.values import label
 from armkit.errors import ArmkitError, DriveError, InputError
 
 EXIT_FAILED, EXIT_BAD_INPUT = 1, 2
-# What is built, as pyproject.toml's description says it: planning, calibration and task files
-# are not, and `armkit demo` says so too.
+# What armkit does, as pyproject.toml's description says it.
 DESCRIPTION = ("Serial robot arms: robot models (DH, modified DH, screws, URDF), forward and "
-               "inverse kinematics, Jacobians, Monte Carlo workspace, joint and Cartesian "
-               "trajectories, and joint waypoints to Modbus TCP drives. Not built yet: path "
-               "planning, calibration, task files.")
+               "inverse kinematics, Jacobians, workspace, trajectories, collision-free path "
+               "planning, hand-eye and kinematic calibration, targets in point clouds, joint "
+               "waypoints to Modbus TCP drives, and the end-to-end job with its report.")
 
 stdout = Console(highlight=False, soft_wrap=True)
 stderr = Console(stderr=True, highlight=False, soft_wrap=True)
