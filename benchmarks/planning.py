@@ -301,10 +301,10 @@ def main() -> None:
         report("OMPL RRTConnect, coarse (1 %)",
                ompl_runs(checker, start, goal, "rrtconnect", seeds, None, 10.0))
         if not args.no_ompl_safe:
-            report(f"OMPL RRTConnect, safe ({safe:.2g})",
-                   ompl_runs(checker, start, goal, "rrtconnect", seeds, safe, 30.0))
-        report("OMPL RRT, coarse (1 %)", ompl_runs(checker, start, goal, "rrt", seeds, None,
-                                                   10.0))
+            report(f"OMPL RRTConnect, safe ({safe:.2g}), 10 s",
+                   ompl_runs(checker, start, goal, "rrtconnect", seeds, safe, 10.0))
+        report("OMPL RRT, coarse (1 %), 2 s", ompl_runs(checker, start, goal, "rrt", seeds,
+                                                        None, 2.0))
         report("OMPL RRTstar, coarse (1 %), 1 s", ompl_runs(checker, start, goal, "rrtstar",
                                                            seeds, None, 1.0))
     print(f"\nload average at end: {os.getloadavg()}")

@@ -17,6 +17,7 @@ from armkit.model import Robot, load_robot, robot, robots, save_robot
 from armkit.trajectory import (Trajectory, cubic, jerk_limited, quintic, retime, spline,
                                tool_motion, trapezoidal)
 from armkit.workspace import Section, Workspace, workspace
+from armkit.planning import PlanResult, Scene, plan
 
 # Loaded on first use, so that `import armkit` does not pay for pymodbus (about 0.1 s).
 _DRIVES = ("load_register_map", "check_waypoints", "send_waypoints", "DriveClient", "SimDrive")
@@ -37,4 +38,4 @@ __all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", "Robot",
            "singular_values", "manipulability", "min_singular_value", "condition_number",
            "ik", "ik_solutions", "IKResult", "IKSolutions", "Trajectory", "cubic", "quintic",
            "trapezoidal", "jerk_limited", "spline", "retime", "tool_motion", "workspace",
-           "Workspace", "Section", *_DRIVES]
+           "Workspace", "Section", "plan", "PlanResult", "Scene", *_DRIVES]

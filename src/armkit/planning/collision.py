@@ -487,6 +487,8 @@ class CollisionChecker:
     def n(self) -> int:
         return self.robot.n
 
+    edge_checks_ends = True         # interior_free checks both ends: planners skip their own
+
     @property
     def lower(self) -> NDArray:
         return self.robot.chain.sampling_limits[0]

@@ -34,7 +34,7 @@ def _drop_repeats(p: NDArray) -> NDArray:
 
 def _point_at(p: NDArray, cum: NDArray, s: float) -> tuple[int, NDArray]:
     """The segment index i (p[i] -> p[i+1]) holding arc length s, and the point there."""
-    i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(p) - 2))
+    i = min(max(int(np.searchsorted(cum, s, side="right")) - 1, 0), len(p) - 2)
     seg = cum[i + 1] - cum[i]
     t = 0.0 if seg == 0 else (s - cum[i]) / seg
     return i, p[i] + t * (p[i + 1] - p[i])
