@@ -223,7 +223,7 @@ def ompl_runs(checker, start, goal, planner, seeds, resolution, time_limit):
         ss = og.SimpleSetup(space)
         counter = [0]
 
-        def valid(state):
+        def valid(state, counter=counter):
             counter[0] += 1
             q = np.array([state[i] for i in range(n)])
             return bool(checker.valid_states(q[None])[0])

@@ -8,9 +8,17 @@ import pytest
 
 import armkit
 from armkit.errors import InputError
-from armkit.planning import (CollisionChecker, Scene, Sphere, ValidityFunction, default_geometry,
-                             path_length, plan, resample, resample_keeping_vertices, shortcut)
-
+from armkit.planning import (
+    CollisionChecker,
+    Scene,
+    ValidityFunction,
+    default_geometry,
+    path_length,
+    plan,
+    resample,
+    resample_keeping_vertices,
+    shortcut,
+)
 from tests.helpers import random_q
 from tests.planning import reference
 from tests.planning.scenes import SHELF_GOAL, SHELF_START, random_scene, shelf

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
+from armkit.kinematics.forward import fk_frames
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import Scene, SceneKernel, scene_kernel
@@ -376,17 +377,12 @@ def obstacle_distance(scene: Scene, a: ArrayLike, b: ArrayLike) -> NDArray:
 
 def arm_capsules(robot: Robot, geometry: ArmGeometry, q: ArrayLike) -> tuple[NDArray, NDArray]:
     """The capsules' segments in the base frame at q (n,): a, b, each (m, 3), m."""
-    frames = np.asarray(_fk_frames(robot, q))
+    frames = fk_frames(robot, q)
     a = np.einsum("mij,mj->mi", frames[geometry.link, :3, :3], geometry.a) + \
         frames[geometry.link, :3, 3]
     b = np.einsum("mij,mj->mi", frames[geometry.link, :3, :3], geometry.b) + \
         frames[geometry.link, :3, 3]
     return a, b
-
-
-def _fk_frames(robot, q):
-    from armkit.kinematics import fk_frames
-    return fk_frames(robot, q)
 
 
 def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
