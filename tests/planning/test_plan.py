@@ -144,8 +144,7 @@ def test_user_validity_function_with_every_planner(planner):
 
 
 def test_direct_edge_first():
-    robot = armkit.robot("ur5")
-    result = plan(robot, np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
+    result = plan("ur5", np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
     assert result.success and result.iterations == 0 and len(result.raw_path) == 2
 
 
