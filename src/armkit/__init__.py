@@ -40,6 +40,7 @@ _HOMES = {
                      "points_to_base", "poses_to_base"), "armkit.calibration"),
     "read_camera_mount": "armkit.io.camera",
     **dict.fromkeys(("detect_target", "TargetResult"), "armkit.perception"),
+    **dict.fromkeys(("plan", "PlanResult", "Scene"), "armkit.planning"),
 }
 
 if TYPE_CHECKING:       # what the names are, for readers and type checkers
@@ -50,6 +51,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
                                send_waypoints)
     from armkit.io.camera import read_camera_mount
     from armkit.perception import TargetResult, detect_target
+    from armkit.planning import PlanResult, Scene, plan
     from armkit.kinematics.forward import fk, fk_frames
     from armkit.kinematics.ik import IKResult, IKSolutions, IKSolver, IKTrack, ik, ik_solutions
     from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 import armkit
-from armkit.planning import CollisionChecker, Scene, default_geometry
 from armkit.io.scene import read_planning_problem
+from armkit.planning import CollisionChecker, Scene, default_geometry
 
 SHELF = str(Path(__file__).parents[2] / "examples" / "shelf.scene.yaml")
 

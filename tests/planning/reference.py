@@ -8,7 +8,7 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from armkit import fk_frames
-from armkit.planning import Box, Capsule, Cylinder, Sphere
+from armkit.planning import Box, Cylinder, Sphere
 
 
 def local(T: np.ndarray, p: np.ndarray) -> np.ndarray:

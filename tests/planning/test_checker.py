@@ -8,9 +8,14 @@ import pytest
 
 import armkit
 from armkit.errors import InputError
-from armkit.planning import (ArmGeometry, CollisionChecker, Scene, arm_geometry,
-                             default_geometry, displacement_weights)
-
+from armkit.planning import (
+    ArmGeometry,
+    CollisionChecker,
+    Scene,
+    arm_geometry,
+    default_geometry,
+    displacement_weights,
+)
 from tests.helpers import random_q
 from tests.planning import reference
 from tests.planning.scenes import SHELF_GOAL, SHELF_START, random_scene, shelf
@@ -85,7 +90,7 @@ def test_certified_edges_keep_half_the_resolution_between_checks():
     accepted = 0
     for qa, qb in zip(Q[:-1:2], Q[1::2]):
         qb = qa + 0.2 * (qb - qa)
-        free, checked = checker.edge_valid(qa, qb)
+        free, _ = checker.edge_valid(qa, qb)
         if free:
             accepted += 1
             obstacle_gap, self_gap, _ = reference.dense_gaps(robot, geometry, scene, [qa, qb],

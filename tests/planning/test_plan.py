@@ -8,9 +8,17 @@ import pytest
 
 import armkit
 from armkit.errors import InputError
-from armkit.planning import (CollisionChecker, Scene, Sphere, ValidityFunction, default_geometry,
-                             path_length, plan, resample, resample_keeping_vertices, shortcut)
-
+from armkit.planning import (
+    CollisionChecker,
+    Scene,
+    ValidityFunction,
+    default_geometry,
+    path_length,
+    plan,
+    resample,
+    resample_keeping_vertices,
+    shortcut,
+)
 from tests.helpers import random_q
 from tests.planning import reference
 from tests.planning.scenes import SHELF_GOAL, SHELF_START, random_scene, shelf
@@ -136,8 +144,7 @@ def test_user_validity_function_with_every_planner(planner):
 
 
 def test_direct_edge_first():
-    robot = armkit.robot("ur5")
-    result = plan(robot, np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
+    result = plan("ur5", np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
     assert result.success and result.iterations == 0 and len(result.raw_path) == 2
 
 

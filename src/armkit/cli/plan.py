@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.table import Table
@@ -19,12 +19,12 @@ PLANNERS = ("rrtconnect", "rrt", "rrtstar")
 def plan_command(
     file: Annotated[Path, typer.Argument(help="Planning file (.yaml): robot, obstacles, start, "
                                               "goal or goal_pose, planner settings.")],
-    planner: Annotated[Optional[str], typer.Option(
+    planner: Annotated[str | None, typer.Option(
         help=f"One of {', '.join(PLANNERS)} (default: the file's, else rrtconnect).")] = None,
-    seed: Annotated[Optional[int], typer.Option(help="Seed (default: the file's).")] = None,
-    waypoints: Annotated[Optional[int], typer.Option(
+    seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).")] = None,
+    waypoints: Annotated[int | None, typer.Option(
         help="Resample the path to N waypoints evenly spaced in joint space.")] = None,
-    out: Annotated[Optional[Path], typer.Option(
+    out: Annotated[Path | None, typer.Option(
         help="Folder for the picture of the arm along the path.")] = None,
     as_json: JsonFlag = False, si: SiFlag = False) -> None:
     """Plan a collision-free path; exit 1 with the reason when none is found."""
@@ -52,7 +52,7 @@ def plan_command(
         from armkit.report.planning import save_path_figure
         figure = str(save_path_figure(checker, result.path, out, units))
     q_units = [units.of_joint(r) for r in robot.chain.revolute]
-    convert = (lambda q: q) if si else robot.q_from_si   # noqa: E731
+    convert = (lambda q: q) if si else robot.q_from_si
     doc = {"robot": robot.name, "success": result.success, "reason": result.reason,
            "planner": result.planner, "units": {"length": units.length, "angle": units.angle},
            "joint_units": q_units, "resolution": float(units.length_from_si(resolution)),

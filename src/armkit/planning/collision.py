@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
+from armkit.kinematics.forward import fk_frames
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import Scene, SceneKernel, scene_kernel
@@ -150,27 +151,34 @@ def _point_cylinder(x, y, z, radius, half):
 @_jit
 def _segment_cylinder(p, d, radius, half):
     """A lower bound (within 1e-8 of the segment's length) on the distance from the segment
-    p + t d to the solid cylinder of `radius` and half length `half` about z."""
+    p + t d to the solid cylinder of `radius` and half length `half` about z: golden-section
+    search of the convex distance along the segment, minus its Lipschitz slack."""
     length = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    lo, hi = 0.0, 1.0
     g = 0.6180339887498949
-    c, e = hi - g * (hi - lo), lo + g * (hi - lo)
-    fc = _point_cylinder(p[0] + c * d[0], p[1] + c * d[1], p[2] + c * d[2], radius, half)
-    fe = _point_cylinder(p[0] + e * d[0], p[1] + e * d[1], p[2] + e * d[2], radius, half)
-    best = min(fc, fe,
-               _point_cylinder(p[0], p[1], p[2], radius, half),
-               _point_cylinder(p[0] + d[0], p[1] + d[1], p[2] + d[2], radius, half))
-    for _ in range(GOLDEN_STEPS):
-        if fc < fe:
+    lo, hi = 0.0, 1.0
+    c, e = 1.0 - g, g
+    fc, fe, best = 0.0, 0.0, np.inf
+    for k in range(GOLDEN_STEPS + 4):
+        if k < 2:
+            t = float(k)                            # the ends
+        elif k == 2:
+            t = c
+        elif k == 3:
+            t = e
+        elif fc < fe:                               # keep [lo, e]: a new inner point c
             hi, e, fe = e, c, fc
             c = hi - g * (hi - lo)
-            fc = _point_cylinder(p[0] + c * d[0], p[1] + c * d[1], p[2] + c * d[2], radius, half)
-            best = min(best, fc)
-        else:
+            t = c
+        else:                                       # keep [c, hi]: a new inner point e
             lo, c, fc = c, e, fe
             e = lo + g * (hi - lo)
-            fe = _point_cylinder(p[0] + e * d[0], p[1] + e * d[1], p[2] + e * d[2], radius, half)
-            best = min(best, fe)
+            t = e
+        f = _point_cylinder(p[0] + t * d[0], p[1] + t * d[1], p[2] + t * d[2], radius, half)
+        best = min(best, f)
+        if t == c:
+            fc = f
+        if t == e:
+            fe = f
     return max(best - length * (hi - lo), 0.0)
 
 
@@ -270,65 +278,79 @@ def free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, ok
 
 
 @_jit
-def free_distances(Q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind, oinv,
-                   odims, ocenter, obound, floor, cap, out):
-    """`free_distance` of every row of Q (N, n) into out (N,)."""
-    seg = np.empty((body.shape[0], 6))
-    T, L, p, d = np.empty((3, 4)), np.empty((3, 4)), np.empty(3), np.empty(11)
-    for k in range(Q.shape[0]):
-        out[k] = free_distance(Q[k], kinds, offsets, pre, links, body, ca, cb, radius, pairs,
-                               okind, oinv, odims, ocenter, obound, floor, cap, seg, T, L, p, d)
+def check(Q, weights, floor, cap, edge, kinds, offsets, pre, links, body, ca, cb, radius, pairs,
+          okind, oinv, odims, ocenter, obound, out):
+    """The one compiled entry point.
 
+    With edge false: `free_distance` (with floor and cap) of every row of Q (N, n) into out (N,).
 
-@_jit
-def edge_free(qa, qb, weights, floor, kinds, offsets, pre, links, body, ca, cb, radius, pairs,
-              okind, oinv, odims, ocenter, obound):
-    """Whether the straight joint-space edge qa -> qb is certified free, and the states checked.
+    With edge true: whether the straight joint-space edge Q[0] -> Q[1] is certified free, into
+    out[0] (1 or 0), and the states checked into out[1]. A piece between checked states a and b
+    on which no point of the arm moves more than D (`displacement_weights`) is certified when
+    ``f_a + f_b > D + floor`` (f: `free_distance`): a configuration a fraction t along it has
+    moved at most tD from a and (1 - t)D from b, so it keeps ``(f_a + f_b - D) / 2 > floor / 2``
+    from every obstacle. Pieces not certified are halved, breadth first (the middle, then
+    quarters, ...); the edge fails at the first state with f <= floor. Both ends are checked.
 
-    A piece between checked states a and b on which no point of the arm moves more than D
-    (`displacement_weights`) is certified when ``f_a + f_b > D + floor`` (f: `free_distance`):
-    a configuration a fraction t along it has moved at most tD from a and (1 - t)D from b, so
-    it keeps ``(f_a + f_b - D) / 2 > floor / 2`` from every obstacle. Pieces not certified are
-    halved, breadth first (the middle, then quarters, ...); the edge fails at the first state
-    with f <= floor. The endpoints are checked too.
+    free_distance is called at one place only: the compiled code stays small.
     """
-    n = qa.shape[0]
-    total = 0.0
-    for i in range(n):
-        total += weights[i] * abs(qb[i] - qa[i])
+    n = Q.shape[1]
     seg = np.empty((body.shape[0], 6))
     T, L, p, d = np.empty((3, 4)), np.empty((3, 4)), np.empty(3), np.empty(11)
-    fa = free_distance(qa, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind,
-                       oinv, odims, ocenter, obound, floor, total + floor, seg, T, L, p, d)
-    if fa <= floor:
-        return False, 1
-    fb = free_distance(qb, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind,
-                       oinv, odims, ocenter, obound, floor, total + floor, seg, T, L, p, d)
-    if fb <= floor:
-        return False, 2
-    size = 2 * int(math.ceil(total / floor)) + 8
-    t0, t1, f0, f1 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
-    head, tail, checked = 0, 1, 2
-    t0[0], t1[0], f0[0], f1[0] = 0.0, 1.0, fa, fb
     q = np.empty(n)
-    while head != tail:
-        a_t, b_t, a_f, b_f = t0[head], t1[head], f0[head], f1[head]
-        head = (head + 1) % size
-        span = (b_t - a_t) * total
-        if a_f + b_f > span + floor:
-            continue
-        m_t = 0.5 * (a_t + b_t)
-        for j in range(n):
-            q[j] = qa[j] + m_t * (qb[j] - qa[j])
+    total = 0.0
+    size = 1
+    if edge:
+        for i in range(n):
+            total += weights[i] * abs(Q[1, i] - Q[0, i])
+        size = 2 * int(math.ceil(total / floor)) + 8
+    t0, t1, f0, f1 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+    head, tail, checked, fa = 0, 0, 0, 0.0
+    a_t = b_t = a_f = b_f = 0.0
+    while True:
+        if not edge:
+            if checked == Q.shape[0]:
+                return
+            t, cap_here = 0.0, cap
+            for j in range(n):
+                q[j] = Q[checked, j]
+        else:
+            # The next state: Q[0], Q[1], then the middle of the next piece not certified.
+            if checked < 2:
+                t, cap_here = float(checked), total + floor
+            else:
+                t = -1.0
+                while head != tail:
+                    a_t, b_t, a_f, b_f = t0[head], t1[head], f0[head], f1[head]
+                    head = (head + 1) % size
+                    span = (b_t - a_t) * total
+                    if a_f + b_f <= span + floor:
+                        t, cap_here = 0.5 * (a_t + b_t), 0.5 * span + floor
+                        break
+                if t < 0.0:
+                    out[0], out[1] = 1.0, checked
+                    return
+            for j in range(n):
+                q[j] = Q[0, j] + t * (Q[1, j] - Q[0, j])
         f = free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind,
-                          oinv, odims, ocenter, obound, floor, 0.5 * span + floor, seg, T, L, p, d)
+                          oinv, odims, ocenter, obound, floor, cap_here, seg, T, L, p, d)
         checked += 1
+        if not edge:
+            out[checked - 1] = f
+            continue
         if f <= floor:
-            return False, checked
-        for lo_t, hi_t, lo_f, hi_f in ((a_t, m_t, a_f, f), (m_t, b_t, f, b_f)):
-            t0[tail], t1[tail], f0[tail], f1[tail] = lo_t, hi_t, lo_f, hi_f
+            out[0], out[1] = 0.0, checked
+            return
+        if checked == 1:
+            fa = f
+        elif checked == 2:
+            t0[tail], t1[tail], f0[tail], f1[tail] = 0.0, 1.0, fa, f
             tail = (tail + 1) % size
-    return True, checked
+        else:
+            t0[tail], t1[tail], f0[tail], f1[tail] = a_t, t, a_f, f
+            tail = (tail + 1) % size
+            t0[tail], t1[tail], f0[tail], f1[tail] = t, b_t, f, b_f
+            tail = (tail + 1) % size
 
 
 # --- Python side -------------------------------------------------------------------------------
@@ -355,17 +377,12 @@ def obstacle_distance(scene: Scene, a: ArrayLike, b: ArrayLike) -> NDArray:
 
 def arm_capsules(robot: Robot, geometry: ArmGeometry, q: ArrayLike) -> tuple[NDArray, NDArray]:
     """The capsules' segments in the base frame at q (n,): a, b, each (m, 3), m."""
-    frames = np.asarray(_fk_frames(robot, q))
+    frames = fk_frames(robot, q)
     a = np.einsum("mij,mj->mi", frames[geometry.link, :3, :3], geometry.a) + \
         frames[geometry.link, :3, 3]
     b = np.einsum("mij,mj->mi", frames[geometry.link, :3, :3], geometry.b) + \
         frames[geometry.link, :3, 3]
     return a, b
-
-
-def _fk_frames(robot, q):
-    from armkit.kinematics import fk_frames
-    return fk_frames(robot, q)
 
 
 def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
@@ -466,6 +483,8 @@ class CollisionChecker:
     def n(self) -> int:
         return self.robot.n
 
+    edge_checks_ends = True         # interior_free checks both ends: planners skip their own
+
     @property
     def lower(self) -> NDArray:
         return self.robot.chain.sampling_limits[0]
@@ -481,7 +500,7 @@ class CollisionChecker:
         q = joint_array(self.robot, q)
         flat = q.reshape(-1, self.n)
         out = np.empty(flat.shape[0])
-        free_distances(flat, *self.kernel_args, -np.inf, np.inf, out)
+        check(flat, self.weights, -np.inf, np.inf, False, *self.kernel_args, out)
         return out.reshape(q.shape[:-1])
 
     def valid(self, q: ArrayLike) -> NDArray:
@@ -499,14 +518,16 @@ class CollisionChecker:
         Q = np.ascontiguousarray(Q, dtype=float)
         out = np.empty(Q.shape[0])
         r = self.resolution
-        free_distances(Q, *self.kernel_args, r, r * (1 + 1e-9) + 1e-12, out)
+        check(Q, self.weights, r, r * (1 + 1e-9) + 1e-12, False, *self.kernel_args, out)
         return out > r
 
     def interior_free(self, qa: NDArray, qb: NDArray) -> tuple[bool, int]:
         """Whether the edge qa -> qb (n,) is certified free (the planners' call; its endpoints
         are checked again), and the states checked."""
-        free, checked = edge_free(qa, qb, self.weights, self.resolution, *self.kernel_args)
-        return bool(free), int(checked)
+        out = np.empty(2)
+        check(np.vstack([qa, qb]), self.weights, self.resolution, 0.0, True, *self.kernel_args,
+              out)
+        return bool(out[0]), int(out[1])
 
     def edge_valid(self, qa: ArrayLike, qb: ArrayLike) -> tuple[bool, int]:
         """Whether the straight joint-space edge qa -> qb (n,) is certified free, endpoints

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import InputError
+from armkit.kinematics.forward import fk_frames
 from armkit.model.robot import Robot
 
 DEFAULT_RADIUS = 0.04       # m, the default capsules' radius when the robot file gives none
@@ -119,8 +120,6 @@ def default_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
 def _skip_touching(robot: Robot, geometry: ArmGeometry, samples: int = 200) -> ArmGeometry:
     """Skip the capsule pairs that touch in most configurations (SRDF's "always" reason):
     neighbours across a short wrist link, which these capsules could never hold apart."""
-    from armkit.kinematics import fk_frames
-
     pairs = geometry.self_pairs()
     if not len(pairs):
         return geometry

@@ -104,6 +104,9 @@ def goals_from_pose(robot: Robot, pose: ArrayLike, *, mask=None, starts: int = 8
 
 
 def _validity(robot_or_checker, scene, resolution, limits):
+    if isinstance(robot_or_checker, str):                   # a built-in name or robot file
+        from armkit.model.files import robot as load
+        robot_or_checker = load(robot_or_checker)
     if isinstance(robot_or_checker, Robot):
         res = 0.005 if resolution is None else resolution
         return CollisionChecker(robot_or_checker, scene if scene is not None else Scene(),
@@ -136,9 +139,9 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
 
     Parameters
     ----------
-    robot_or_checker : Robot, CollisionChecker or callable
-        A robot (its capsules against `scene`), a built checker, or a validity function
-        ``f(Q (k, n)) -> (k,) bool`` with `limits`.
+    robot_or_checker : Robot, str, CollisionChecker or callable
+        A robot or its name / file (its capsules against `scene`), a built checker, or a
+        validity function ``f(Q (k, n)) -> (k,) bool`` with `limits`.
     start : array_like, (n,)
         rad / m.
     goal : array_like, (n,) or (g, n), optional

@@ -60,7 +60,7 @@ class Box:
         object.__setattr__(self, "pose", _pose(self.pose, "box pose"))
 
     @classmethod
-    def from_bounds(cls, lower: ArrayLike, upper: ArrayLike, name: str = "") -> "Box":
+    def from_bounds(cls, lower: ArrayLike, upper: ArrayLike, name: str = "") -> Box:
         """An axis-aligned box between two corners (3,) m."""
         lower, upper = _point(lower, "box lower corner"), _point(upper, "box upper corner")
         if not np.all(upper > lower):
@@ -142,7 +142,7 @@ class Scene:
     def __iter__(self):
         return iter(self.obstacles)
 
-    def __add__(self, other: "Scene") -> "Scene":
+    def __add__(self, other: Scene) -> Scene:
         return Scene(self.obstacles + tuple(other.obstacles))
 
 

@@ -34,7 +34,7 @@ def _drop_repeats(p: NDArray) -> NDArray:
 
 def _point_at(p: NDArray, cum: NDArray, s: float) -> tuple[int, NDArray]:
     """The segment index i (p[i] -> p[i+1]) holding arc length s, and the point there."""
-    i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(p) - 2))
+    i = min(max(int(np.searchsorted(cum, s, side="right")) - 1, 0), len(p) - 2)
     seg = cum[i + 1] - cum[i]
     t = 0.0 if seg == 0 else (s - cum[i]) / seg
     return i, p[i] + t * (p[i + 1] - p[i])
@@ -64,18 +64,21 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
         Same start and end, no longer than the input.
     """
     p = _drop_repeats(_path(path))
+    ends_in_edge = bool(getattr(validity, "edge_checks_ends", False))
     rng = np.random.default_rng(seed)
-    for _ in range(tries):
+    draws = np.sort(rng.random((tries, 2)), axis=1)          # arc-length fractions, drawn once
+    cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
+    for f1, f2 in draws:
         if len(p) < 3:
             break
-        cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
-        s1, s2 = np.sort(rng.uniform(0.0, cum[-1], 2))
-        i1, a = _point_at(p, cum, s1)
-        i2, b = _point_at(p, cum, s2)
+        i1, a = _point_at(p, cum, f1 * cum[-1])
+        i2, b = _point_at(p, cum, f2 * cum[-1])
         if i1 == i2:
             continue
-        if validity.valid_states(np.vstack([a, b])).all() and validity.interior_free(a, b)[0]:
+        if (ends_in_edge or validity.valid_states(np.vstack([a, b])).all()) and \
+                validity.interior_free(a, b)[0]:
             p = _drop_repeats(np.vstack([p[:i1 + 1], a, b, p[i2 + 1:]]))
+            cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
     out, i = [p[0]], 0
     while i < len(p) - 1:
         for j in range(len(p) - 1, i, -1):

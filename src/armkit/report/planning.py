@@ -16,7 +16,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from armkit.kinematics import fk
 from armkit.model.robot import Units
 from armkit.planning.collision import arm_capsules
-from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
+from armkit.planning.scene import Box, Cylinder, Sphere
 
 _FACES = ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5))
 
