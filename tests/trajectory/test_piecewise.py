@@ -30,12 +30,16 @@ def numpy_reference(tr: Trajectory, t: np.ndarray, r: int) -> np.ndarray:
     return out
 
 
+@pytest.mark.parametrize("threads", [1, 2])
 @pytest.mark.parametrize("count, order", [
     (7, "random"), (3 * _kernels.PARALLEL_FROM + 5, "random"),       # serial, parallel
     (3 * _kernels.PARALLEL_FROM + 5, "sorted"),                       # runs within a piece
     (50, "breaks"),                                                   # exactly on the breaks
 ])
-def test_sample_matches_numpy_polynomials(count, order):
+def test_sample_matches_numpy_polynomials(count, order, threads, monkeypatch):
+    import armkit.threads
+
+    monkeypatch.setattr(armkit.threads, "_chosen", threads)    # as armkit.set_num_threads
     tr = random_trajectory()
     t = np.random.default_rng(1).uniform(tr.start, tr.end, count)
     if order == "sorted":

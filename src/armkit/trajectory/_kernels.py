@@ -13,6 +13,8 @@ import math
 import numba
 import numpy as np
 
+from armkit.threads import threads_for
+
 _jit = numba.njit(cache=True, nogil=True)
 _pjit = numba.njit(cache=True, nogil=True, parallel=True)
 
@@ -99,8 +101,18 @@ def evaluate_parallel(breaks, table, t, out):
 
 
 def run_evaluate(breaks: np.ndarray, table: np.ndarray, t: np.ndarray, out: np.ndarray) -> None:
-    """Call the serial or parallel evaluation, whichever suits the number of samples."""
-    (evaluate_parallel if t.shape[0] >= PARALLEL_FROM else evaluate)(breaks, table, t, out)
+    """Call the serial evaluation, or the parallel one on as many threads as the number of
+    samples and the idle cores are worth (`armkit.threads.threads_for`)."""
+    threads = threads_for(t.shape[0], PARALLEL_FROM)
+    if threads == 1:
+        evaluate(breaks, table, t, out)
+        return
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))   # this thread only
+    try:
+        evaluate_parallel(breaks, table, t, out)
+    finally:
+        numba.set_num_threads(before)
 
 
 # --- rest-to-rest profile timing (profiles.py) ------------------------------------------------

@@ -183,20 +183,22 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     return Trajectory(breaks, c, label=label)
 
 
-def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike]]):
-    """q0, qf and the limits as float arrays of one shape (..., n); the kernel checks values."""
+def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike]]) -> NDArray:
+    """q0, qf and the limits stacked into one float array (k, ..., n), each broadcast to the
+    problems' shape (one allocation: a single problem costs little more than the kernel); the
+    kernel checks the values."""
     raw = [q0, qf] + [v for _, v in lims]
     try:
-        arrays = [np.asarray(x, dtype=float) for x in raw]
-        shapes = {a.shape for a in arrays}
-        shape = shapes.pop() if len(shapes) == 1 else np.broadcast_shapes(*shapes)
+        shape = np.broadcast_shapes(*(np.shape(x) for x in raw))
+        stacked = np.empty((len(raw),) + shape)
+        for row, x in zip(stacked, raw):
+            row[...] = x
     except (TypeError, ValueError):
         raise InputError(f"q0, qf, limits: expected numbers of shapes that broadcast to "
                          f"(..., n), found {[np.shape(x) for x in raw]}") from None
     if not shape:
         raise InputError("q0, qf: expected shape (..., n), found scalars")
-    return [a if a.shape == shape else np.full(shape, a) if a.ndim == 0 else
-            np.broadcast_to(a, shape) for a in arrays]
+    return stacked
 
 
 def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -207,15 +209,15 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
     return a, b
 
 
-def _profile(order: int, arrays: list[NDArray], names: tuple[str, ...], sync: str) -> Profile:
-    """Run the kernel on q0, qf, vmax, amax(, jmax) of shape (..., n)."""
+def _profile(order: int, arrays: NDArray, names: tuple[str, ...], sync: str) -> Profile:
+    """Run the kernel on q0, qf, vmax, amax(, jmax) stacked as (k, ..., n)."""
     if sync not in ("time", "phase"):
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
-    shape, n = arrays[0].shape, arrays[0].shape[-1]
-    if order == 2:
-        arrays = arrays + [np.ones(shape)]          # the kernel's unused jerk limit
-    times, values, bad = _kernels.profile_phases(
-        order, *(np.ascontiguousarray(x).reshape(-1, n) for x in arrays), sync == "phase")
+    shape, n = arrays.shape[1:], arrays.shape[-1]
+    flat = arrays.reshape(arrays.shape[0], -1, n)
+    jerk = flat[4] if order == 3 else np.ones_like(flat[0])    # a trapezoid's unused jerk
+    times, values, bad = _kernels.profile_phases(order, flat[0], flat[1], flat[2], flat[3], jerk,
+                                                 sync == "phase")
     if bad == 1:
         raise InputError("q0, qf: expected finite joint values, found NaN or inf")
     if bad:
