@@ -284,7 +284,12 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
     q, previous, zero, found = np.empty(n), np.empty(n), np.zeros(n), np.empty(2)
     attempts = 1 if follow else restarts + 1
     for t in range(first, last):
-        state = np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(t)
+        # The stream's start, scrambled: a start of seed * step + t would make seed s + 1
+        # replay seed s's stream one draw later (the stream adds step per draw).
+        z = np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(t)
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        state = z ^ (z >> np.uint64(31))
         best, total, done = np.inf, 0, False
         for j in range(n):
             previous[j] = q[j]
