@@ -337,8 +337,8 @@ def test_seed_starts_are_the_samples_nearest_the_target_around_it(count):
     F = bank.features[:, cols]
     wanted = features(T, bank.length)[:, cols]
     d = np.sum((wanted[:, None, :] - F[None]) ** 2, axis=-1)                  # (50, 4096)
-    picked = np.sum((wanted[:, None, :] - features(armkit.fk(robot, starts), bank.length)[..., cols]) ** 2,
-                    axis=-1)
+    reached = features(armkit.fk(robot, starts), bank.length)[..., cols]
+    picked = np.sum((wanted[:, None, :] - reached) ** 2, axis=-1)
     assert starts.shape == (50, count, robot.n)
     assert np.all(np.diff(picked, axis=1) >= 0)                                # ranked
     assert np.all([len(np.unique(s, axis=0)) == count for s in starts])        # distinct
