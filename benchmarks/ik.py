@@ -1,22 +1,30 @@
 """Inverse kinematics: armkit's closed forms and numeric solver against roboticstoolbox's C++
 Levenberg-Marquardt (``ets.ik_LM``) and ikpy, on the same targets in the same run.
 
-    python benchmarks/ik.py            # 1000 targets per robot
-    python benchmarks/ik.py --quick    # 200 targets, fewer single calls
+    python benchmarks/ik.py            # 1000 targets per robot, 3 rounds
+    python benchmarks/ik.py --quick    # 200 targets, 2 rounds
 
 Targets: the FK of joint vectors drawn uniformly inside the limits (seed 0). Success is judged
-by armkit's FK for every solver alike: position error < 1e-9 m, rotation error < 1e-9 rad, and
-within the joint limits. rtb runs at ``tol=1e-13`` (its tol bounds half the squared error, so
-its default 1e-6 only promises about 1e-3, and 1e-13 about 4.5e-7) and at ``tol=1e-19``
-(about 4.5e-10, the accuracy judged here). Times: mean per target of a batch call (armkit only;
-the references have no batch call): "first" with the seed bank still to build (see
-`armkit.kinematics.ik.numeric`), "batch" the best of five calls after; and mean and median of
-one call per target.
+by armkit's FK for every solver alike: position error < 1e-9 m, rotation error < 1e-9 rad
+(under the task's mask), and within the joint limits. rtb runs at ``tol=1e-19`` (its tol bounds
+half the squared error: about 4.5e-10, the accuracy judged here). Times, as min / median / max
+over rounds (armkit and rtb interleaved round by round):
+
+- "batch": one `IKSolver.solve` call for all targets, per target;
+- "1 call": one `IKSolver.solve` per target (a held solver, as rtb's cached ``ets``), mean;
+- "ik()": one `armkit.ik` per target (a solver derived per call), mean;
+- the partial tasks (position, +yaw, +pitch, +axis) on the 6- and 7-joint arms: success and
+  batch time;
+- every closed-form solution of 1000 UR5 targets: one batch `IKSolver.solutions` call against a
+  loop of single calls.
+
+The load average is printed before and after: the machine may be shared.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import time
 import warnings
 
@@ -26,20 +34,21 @@ from ikpy.chain import Chain as IkpyChain
 from ikpy.link import OriginLink, URDFLink
 
 import armkit
-from armkit.kinematics.ik import analytic, ik, numeric
+from armkit.kinematics.ik import IKSolver, ik
 from armkit.kinematics.ik.task import as_mask, task_errors
 from armkit.spatial import matrix_to_rpy
 
-ROBOTS = ["ur5", "puma560", "inspection_6dof", "panda", "tool_changer_6dof"]
+ROBOTS = ["ur5", "puma560", "inspection_6dof", "stanford", "panda", "tool_changer_6dof"]
+PARTIAL = ["position", "position+yaw", "position+pitch", "position+axis"]
 TOL = 1e-9
 
 
-def judge(robot, q, T) -> np.ndarray:
+def judge(robot, q, T, mask="pose") -> np.ndarray:
     """Success of solutions q (N, n) for targets T (N, 4, 4), by armkit's FK."""
     q = np.asarray(q, dtype=float)
     finite = np.isfinite(q).all(axis=1)
     q = np.where(finite[:, None], q, 0.0)
-    pe, re = task_errors(armkit.fk(robot, q), T, as_mask("pose"))
+    pe, re = task_errors(armkit.fk(robot, q), T, as_mask(mask))
     inside = np.all((q >= robot.lower - 1e-12) & (q <= robot.upper + 1e-12), axis=1)
     return finite & (pe < TOL) & (re < TOL) & inside
 
@@ -86,66 +95,105 @@ def ikpy_chain(robot) -> IkpyChain:
         return IkpyChain(links, active_links_mask=mask, jax_precompile=False)
 
 
-def singles(solve, T, count):
-    """Solve the first `count` targets one call each: (q, times in s, iterations or None)."""
-    qs, times, its = [], [], []
-    for Ti in T[:count]:
-        t = time.perf_counter()
-        q, it = solve(Ti)
-        times.append(time.perf_counter() - t)
-        qs.append(q)
-        its.append(it)
-    return np.array(qs), np.array(times), its
+def timed(f):
+    t = time.perf_counter()
+    out = f()
+    return out, time.perf_counter() - t
 
 
-def report(robot_name, solver, ok, first, batch, single, iterations):
-    it = f"{np.mean(iterations):8.1f}" if iterations is not None else f"{'n/a':>8}"
-    first, batch = (f"{t * 1e6:9.1f}" if t is not None else f"{'-':>9}" for t in (first, batch))
-    print(f"{robot_name:18} {solver:22} {100 * ok.mean():7.2f}% {first} {batch} "
-          f"{np.mean(single) * 1e6:9.1f} {np.median(single) * 1e6:9.1f} {it}")
+def spread(times, per: int = 1) -> str:
+    """min / median / max of times (s) per item, in us."""
+    t = np.asarray(times) / per * 1e6
+    return f"{t.min():7.1f} / {np.median(t):7.1f} / {t.max():7.1f}"
+
+
+def row(robot, solver, success, batch, one, wrapper, iterations):
+    it = f"{np.mean(iterations):6.1f}" if iterations is not None else f"{'':>6}"
+    print(f"| {robot} | {solver} | {100 * np.mean(success):.1f} % | {batch} | {one} | "
+          f"{wrapper} | {it} |", flush=True)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="200 targets, fewer single calls")
+    parser.add_argument("--quick", action="store_true", help="200 targets, 2 rounds")
     args = parser.parse_args()
-    n_targets, n_single, n_ikpy = (200, 50, 20) if args.quick else (1000, 200, 50)
-    print(f"{'robot':18} {'solver':22} {'success':>8} {'first us':>9} {'batch us':>9} "
-          f"{'1-call us':>9} {'median':>9} {'iters':>8}")
+    n_targets, n_single, n_ikpy, rounds = (200, 50, 10, 2) if args.quick else (1000, 200, 30, 3)
+    print(f"load average before: {os.getloadavg()}")
+    print("| robot | solver | success | batch us/target min/med/max | 1 call us | ik() us | "
+          "iterations |")
+    print("|---|---|---|---|---|---|---|")
     for name in ROBOTS:
         robot = armkit.robot(name)
         Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (n_targets, robot.n))
         T = armkit.fk(robot, Q)
-        ets, chain = rtb_ets(robot), ikpy_chain(robot)
+        ets = rtb_ets(robot)
         assert np.abs(ets.eval(Q[:50]) - T[:50]).max() < 1e-12
-        assert np.abs(chain.forward_kinematics(np.r_[0, Q[0], 0]) - T[0]).max() < 1e-9
-        methods = (["auto"] if analytic.family_of(robot.chain) else []) + ["lm"]
+        warm = IKSolver(robot)
+        methods = (["auto"] if warm.family else []) + ["lm"]
         for method in methods:
-            ik(robot, T, method=method)                                # compile / warm up
-            numeric._bank.cache_clear()
-            t = time.perf_counter()
-            ik(robot, T, method=method)
-            first = time.perf_counter() - t
-            best = np.inf
-            for _ in range(5):
-                t = time.perf_counter()
-                result = ik(robot, T, method=method)
-                best = min(best, time.perf_counter() - t)
-            single = singles(lambda Ti: (ik(robot, Ti, method=method).q, 0), T, n_single)[1]
-            label = f"armkit {result.method[0].removeprefix('analytic:')}"
-            report(name, label, judge(robot, result.q, T), first / n_targets, best / n_targets,
-                   single, result.iterations)
-        for tol in (1e-13, 1e-19):
-            solve = lambda Ti: (lambda s: (s.q, s.iterations))(              # noqa: E731
-                ets.ik_LM(Ti, tol=tol, joint_limits=True))
-            q, times, its = singles(solve, T, n_targets)
-            report(name, f"rtb ik_LM tol={tol:.0e}", judge(robot, q, T), None, None, times, its)
+            warm.solve(T[:3], method=method)
+            warm.solve(T[0], method=method)
+            batch, one, wrapper, rtb_one = [], [], [], []
+            for _ in range(rounds):
+                solver = IKSolver(robot)
+                result, dt = timed(lambda: solver.solve(T, method=method))
+                batch.append(dt)
+                _, dt = timed(lambda: [solver.solve(T[i], method=method)
+                                       for i in range(n_single)])
+                one.append(dt)
+                _, dt = timed(lambda: [ik(robot, T[i], method=method) for i in range(n_single)])
+                wrapper.append(dt)
+                if method == methods[-1]:       # the reference, interleaved
+                    sols, dt = timed(lambda: [ets.ik_LM(T[i], tol=1e-19, joint_limits=True)
+                                              for i in range(n_single)])
+                    rtb_one.append(dt)
+            label = ("armkit closed form " + result.method[0].removeprefix("analytic:")
+                     if method == "auto" else "armkit Levenberg-Marquardt")
+            row(name, label, judge(robot, result.q, T), spread(batch, n_targets),
+                spread(one, n_single), spread(wrapper, n_single), result.iterations)
+        rtb_q = [ets.ik_LM(T[i], tol=1e-19, joint_limits=True) for i in range(n_targets)]
+        row(name, "rtb `ik_LM` tol=1e-19", judge(robot, [s.q for s in rtb_q], T), "", 
+            spread(rtb_one, n_single), "", [s.iterations for s in rtb_q])
+        chain = ikpy_chain(robot)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            q, times, _ = singles(lambda Ti: (chain.inverse_kinematics_frame(Ti)[1:-1], None),
-                                  T, n_ikpy)
-        report(name, f"ikpy ({n_ikpy} targets)", judge(robot, q, T[:n_ikpy]), None, None, times,
-               None)
+            q, dt = timed(lambda: [chain.inverse_kinematics_frame(T[i])[1:-1]
+                                   for i in range(n_ikpy)])
+        row(name, f"ikpy ({n_ikpy} targets)", judge(robot, q, T[:n_ikpy]), "",
+            spread([dt], n_ikpy), "", None)
+    print(f"\nPartial tasks (position + ...): success at {TOL:g}, batch us per target "
+          f"(min / median / max of {rounds})")
+    print("| robot | " + " | ".join(PARTIAL) + " |")
+    print("|---|" + "---|" * len(PARTIAL))
+    for name in ROBOTS:
+        robot = armkit.robot(name)
+        Q = np.random.default_rng(1).uniform(robot.lower, robot.upper, (n_targets, robot.n))
+        T = armkit.fk(robot, Q)
+        solver = IKSolver(robot)
+        cells = []
+        for mask in PARTIAL:
+            times = []
+            for _ in range(rounds):
+                result, dt = timed(lambda: solver.solve(T, mask=mask))
+                times.append(dt)
+            ok = judge(robot, result.q, T, mask)
+            cells.append(f"{100 * ok.mean():.1f} %, {spread(times, n_targets)}")
+        print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
+    ur5 = armkit.robot("ur5")
+    T = armkit.fk(ur5, np.random.default_rng(2).uniform(ur5.lower, ur5.upper, (1000, 6)))
+    solver = IKSolver(ur5)
+    solver.solutions(T[:2])
+    batch, loop = [], []
+    for _ in range(rounds):
+        sols, dt = timed(lambda: solver.solutions(T))
+        batch.append(dt)
+        _, dt = timed(lambda: [solver.solutions(T[i]) for i in range(200)])
+        loop.append(dt)
+    print(f"\nEvery closed-form solution of 1000 ur5 targets: one call {spread(batch, 1000)} us "
+          f"per target, a loop of single calls {spread(loop, 200)} us per target "
+          f"({np.median(loop) / 200 / (np.median(batch) / 1000):.1f}x); "
+          f"{sols.count.sum()} solutions, {sols.count.min()}-{sols.count.max()} per target")
+    print(f"load average after: {os.getloadavg()}")
 
 
 if __name__ == "__main__":

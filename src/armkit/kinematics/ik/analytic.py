@@ -46,8 +46,7 @@ def _dot(a, b):
 
 def _cross(a, b):
     """Cross product over the last axis; several times faster than np.cross on small batches."""
-    a, b = np.broadcast_arrays(a, b)
-    out = np.empty(a.shape)
+    out = np.empty(a.shape if a.shape == b.shape else np.broadcast_shapes(a.shape, b.shape))
     out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
     out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
     out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]

@@ -185,68 +185,78 @@ def _bounded(q, dq, lower, upper, turn, q_new):
 
 @_jit
 def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacobians, residuals,
-             task_jacobians, joints, vectors, H, free, earlier):
-    """One attempt from q (updated in place to where it ends): (converged, cost, iterations).
+             task_jacobians, joints, vectors, H, free, earlier, errors):
+    """One attempt from q (updated in place to where it ends): (converged, cost, iterations);
+    errors (2,) gets the position and rotation error at q.
 
     LM only keeps steps that lower the cost, so it ends at its best point; Newton takes every
     step and stops when the step vanishes. With `stall`, an attempt that stops making progress
     ends early. The arrays after `stall` are scratch (see `solve_targets`).
+
+    Each kernel it calls is called from one place (the trial point is evaluated at the top of
+    the loop, the held-joint step is the second pass of one loop): the compiled code inlines
+    every call, so each call site costs compile time.
     """
     kinds, offsets, pre, links = chain
     lower, upper, turn = limits[0], limits[1], limits[2]
     mask, rows, tol_p, tol_r = task
     n = q.shape[0]
-    q_new, dq, g, y = joints[0], joints[1], vectors[0], vectors[1]
+    q_try, dq, g, y = joints[0], joints[1], vectors[0], vectors[1]
     E, w = poses[2, :3, :3], poses[2, 3, :3]
     T, T2, J, J2 = poses[0], poses[1], jacobians[0], jacobians[1]
     e, e2, A, A2 = residuals[0], residuals[1], task_jacobians[0], task_jacobians[1]
-    pose_jacobian_one(q, kinds, offsets, pre, links, T, J)
-    cost = task_residual(T, J, Tt, mask, rows, e, A, E, w)
-    lam = 1e-3 if method == LM else 1e-15
+    for j in range(n):
+        q_try[j] = q[j]
     for j in range(STALL_WINDOW):                       # the cost 1, 2, 3 iterations ago
         earlier[j] = np.inf
-    for it in range(iterations):
-        ep, er = task_errors_one(T, Tt, mask)
-        if ep < tol_p and er < tol_r:
+    lam = 1e-3 if method == LM else 1e-15
+    cost, size, first, evaluate = np.inf, np.inf, True, True
+    for it in range(iterations + 1):
+        if evaluate:                                    # the trial point q_try
+            pose_jacobian_one(q_try, kinds, offsets, pre, links, T2, J2)
+            new_cost = task_residual(T2, J2, Tt, mask, rows, e2, A2, E, w)
+            if first or method == NEWTON or new_cost < cost:
+                for j in range(n):
+                    q[j] = q_try[j]
+                T, T2, J, J2, e, e2, A, A2 = T2, T, J2, J, e2, e, A2, A
+                cost = new_cost
+                if not first:
+                    lam = max(lam / 10.0, 1e-15)
+            else:
+                lam *= 10.0
+        errors[0], errors[1] = task_errors_one(T, Tt, mask)
+        if errors[0] < tol_p and errors[1] < tol_r:
             return True, cost, it
+        if it == iterations or lam > MAX_LAMBDA:
+            return False, cost, it
+        if method == NEWTON and not first and size < 1e-15:
+            return False, cost, it                      # no step left: a stationary point
+        first = False
         if stall and it >= STALL_AFTER and cost > STALL_FACTOR * earlier[it % STALL_WINDOW]:
             return False, cost, it
         earlier[it % STALL_WINDOW] = cost
         for j in range(n):
             free[j] = True
-        ok = _step(A, e, lam, free, dq, H, g, y)
-        if ok:
-            # Hold the joints this step pushes past a limit, and step with the others.
+        # The step; a second pass holds the joints it pushes past a limit and steps with the
+        # others.
+        ok = False
+        for attempt in range(2):
+            ok = _step(A, e, lam, free, dq, H, g, y)
             held = False
-            for j in range(n):
-                if not turn[j] and ((q[j] <= lower[j] and dq[j] < 0.0)
-                                    or (q[j] >= upper[j] and dq[j] > 0.0)):
-                    free[j] = False
-                    held = True
-            if held:
-                ok = _step(A, e, lam, free, dq, H, g, y)
+            if ok and attempt == 0:
+                for j in range(n):
+                    if not turn[j] and ((q[j] <= lower[j] and dq[j] < 0.0)
+                                        or (q[j] >= upper[j] and dq[j] > 0.0)):
+                        free[j] = False
+                        held = True
+            if not held:
+                break
+        evaluate = ok
         if not ok:
             lam *= 10.0
-            if lam > MAX_LAMBDA:
-                return False, cost, it + 1
             continue
-        size = _bounded(q, dq, lower, upper, turn, q_new)
-        pose_jacobian_one(q_new, kinds, offsets, pre, links, T2, J2)
-        new_cost = task_residual(T2, J2, Tt, mask, rows, e2, A2, E, w)
-        if method == NEWTON or new_cost < cost:
-            for j in range(n):
-                q[j] = q_new[j]
-            T, T2, J, J2, e, e2, A, A2 = T2, T, J2, J, e2, e, A2, A
-            cost = new_cost
-            lam = max(lam / 10.0, 1e-15)
-            if method == NEWTON and size < 1e-15:       # no step left: a stationary point
-                return False, cost, it + 1
-        else:
-            lam *= 10.0
-            if lam > MAX_LAMBDA:
-                return False, cost, it + 1
-    ep, er = task_errors_one(T, Tt, mask)
-    return ep < tol_p and er < tol_r, cost, iterations
+        size = _bounded(q, dq, lower, upper, turn, q_try)
+    return False, cost, iterations
 
 
 @_jit
@@ -258,11 +268,11 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
 
     budget = (max_iter, restarts, method, seed, follow, max_step, polish). Solving (follow
     0): each target from its starts (N, S, n), then random restarts, then (if polish) a long
-    run from its best point; returns (last, 0). Following (follow 1): target t starts from the solution of t - 1
-    (the first from starts[first, 0]), with no restart; stops at the first target not solved
-    (cause 1) or, after the first, whose solution moved a joint by more than max_step (cause
-    2); returns (first target not followed, cause), (last, 0) when all were. One kernel does
-    both so that the first call compiles the solver once.
+    run from its best point; returns (last, 0). Following (follow 1): target t starts from the
+    solution of t - 1 (the first from starts[first, 0]), with no restart; stops at the first
+    target not solved (cause 1) or, after the first, whose solution moved a joint by more than
+    max_step (cause 2); returns (first target not followed, cause), (last, 0) when all were.
+    One kernel does both so that the first call compiles the solver once.
     """
     lower, upper, turn, sample_lo, sample_hi = limits
     max_iter, restarts, method, seed, follow, max_step, polish = budget
@@ -271,56 +281,48 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
     poses, jacobians, residuals = np.empty((3, 4, 4)), np.empty((2, 6, n)), np.empty((2, m))
     task_jacobians, joints, vectors = np.empty((2, m, n)), np.empty((2, n)), np.empty((2, k))
     H, free, earlier = np.empty((k, k)), np.empty(n, dtype=np.bool_), np.empty(STALL_WINDOW)
-    q, previous, zero = np.empty(n), np.empty(n), np.zeros(n)
-    stall, polish_stall = follow == 0, follow < 0       # run-time flags: one compiled _descend
-    if follow:
-        for j in range(n):
-            q[j] = starts[first, 0, j]
-        _bounded(q, zero, lower, upper, turn, q)
+    q, previous, zero, found = np.empty(n), np.empty(n), np.zeros(n), np.empty(2)
+    attempts = 1 if follow else restarts + 1
     for t in range(first, last):
-        state = np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(t)
+        # The stream's start, scrambled: a start of seed * step + t would make seed s + 1
+        # replay seed s's stream one draw later (the stream adds step per draw).
+        z = np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) + np.uint64(t)
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        state = z ^ (z >> np.uint64(31))
         best, total, done = np.inf, 0, False
         for j in range(n):
             previous[j] = q[j]
-        for attempt in range(0 if follow else restarts + 1):
+        # Attempts from the starts, then random ones; the one after the last is the long run
+        # from the best point (near a singularity convergence slows down: an attempt may end,
+        # or be judged stalled, close to a solution it had no time to reach).
+        for attempt in range(attempts + (0 if follow else polish)):
+            long_run = attempt == attempts
             for j in range(n):
-                if attempt < starts.shape[1]:
+                if long_run:
+                    q[j] = q_out[t, j]
+                elif follow:
+                    q[j] = starts[first, 0, j] if t == first else previous[j]
+                elif attempt < starts.shape[1]:
                     q[j] = starts[t, attempt, j]
                 else:
                     state, u = _random(state)
                     q[j] = sample_lo[j] + u * (sample_hi[j] - sample_lo[j])
             _bounded(q, zero, lower, upper, turn, q)
-            ok, cost, its = _descend(q, targets[t], chain, limits, task, method, max_iter, stall,
-                                     poses, jacobians, residuals, task_jacobians, joints,
-                                     vectors, H, free, earlier)
+            ok, cost, its = _descend(q, targets[t], chain, limits, task, method,
+                                     10 * max_iter if long_run else max_iter,
+                                     not (long_run or follow), poses, jacobians, residuals,
+                                     task_jacobians, joints, vectors, H, free, earlier, found)
             total += its
-            if ok or cost < best:
+            if ok or cost < best or follow:
                 best = cost
                 for j in range(n):
                     q_out[t, j] = q[j]
+                errors[t, 0], errors[t, 1] = found[0], found[1]
             if ok:
                 done = True
                 break
-        if not done and (polish or follow):
-            # Near a singularity convergence slows down: an attempt may end (or be judged
-            # stalled) close to a solution it had no time to reach. Give the best point a long
-            # last run. (Following: the one run, from the previous solution.)
-            if not follow:
-                for j in range(n):
-                    q[j] = q_out[t, j]
-            ok, cost, its = _descend(q, targets[t], chain, limits, task, method,
-                                     max_iter if follow else 10 * max_iter, polish_stall, poses,
-                                     jacobians, residuals, task_jacobians, joints, vectors, H,
-                                     free, earlier)
-            total += its
-            if ok or cost < best or follow:
-                for j in range(n):
-                    q_out[t, j] = q[j]
-            done = ok
         converged[t], iterations[t] = done, total
-        pose_jacobian_one(q_out[t], chain[0], chain[1], chain[2], chain[3], poses[0],
-                          jacobians[0])
-        errors[t, 0], errors[t, 1] = task_errors_one(poses[0], targets[t], task[0])
         if follow:
             if not done:
                 return t, 1

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.kinematics.forward import fk
+from armkit.kinematics import _kernels
 from armkit.kinematics.ik import analytic, numeric
 from armkit.kinematics.ik.choose import CRITERIA, fold_into_limits, scores, within_limits
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
@@ -525,9 +525,18 @@ class IKSolver:
         C = analytic.candidates(robot.chain, family, T)
         real = np.isfinite(C).all(axis=-1)
         C = fold_into_limits(robot, np.where(real[..., None], C, 0.0), q_ref[:, None, :])
-        pe, re = task_errors(fk(robot, C), T[:, None], mask)
+        pe, re = task_errors(self._poses(C), T[:, None], mask)
         reached = real & (pe < tol_position) & (re < tol_rotation)
         return C, real, pe, re, reached, within_limits(robot, C)
+
+    def _poses(self, Q: NDArray) -> NDArray:
+        """Tool poses (..., 4, 4) of Q (..., n) by the serial FK loop: checking candidates is
+        a few microseconds per target, and threads on a busy machine would cost more."""
+        flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
+        out = np.empty((flat.shape[0], 4, 4))
+        k = self.robot.chain.kernel
+        _kernels.poses(flat, k.kinds, k.offsets, k.pre, k.links, out)
+        return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:
         """Levenberg-Marquardt (or Newton) where the closed form did not settle the target:
