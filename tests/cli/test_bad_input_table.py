@@ -344,7 +344,7 @@ def test_the_table_is_large_and_covers_every_subcommand():
                          ids=[" ".join(a)[:60] for a, _ in ROWS])
 def test_bad_input_is_exit_2_and_one_line_naming_it(table, index):
     results, tmp = table
-    (args, words), result = ROWS[index], results[index]
+    (_, words), result = ROWS[index], results[index]
     words = words.replace("{tmp}", str(tmp))
     assert not result["exception"], result["exception"]
     assert result["exit"] == 2, (result["stdout"], result["stderr"])

@@ -71,16 +71,6 @@ def test_long_runs_show_progress_on_stderr_only(tmp_path, monkeypatch):
     assert json.loads(result.stdout)["samples"] == 3000
 
 
-def test_on_a_dask_cluster_the_numbers_are_the_local_ones(tmp_path, dask_client):
-    args = ["workspace", "inspection_6dof", "-n", "30000", "--out", str(tmp_path), "--json"]
-    local = json.loads(run(*args).stdout)
-    result = run(*args, "--scheduler", dask_client.scheduler.address)
-    assert result.exit_code == 0, result.output
-    remote = json.loads(result.stdout)
-    assert {k: v for k, v in remote.items() if k != "figures"} == {
-        k: v for k, v in local.items() if k != "figures"}
-
-
 @pytest.mark.parametrize("args, words", [
     (("-n", "0"), "armkit: -n: expected a whole number from 1 to 1e+10 samples in this "
                   "process (--scheduler for more), found 0"),
@@ -171,27 +161,29 @@ def test_workspace_on_a_scheduler_by_address_from_python(scheduler_address):
     assert remote.volume == local.volume and remote.reach == local.reach
 
 
-@pytest.mark.parametrize("address, words", [
-    ("127.0.0.1", "expected an address such as tcp://127.0.0.1:8786, found '127.0.0.1'"),
-    ("bogus://127.0.0.1:5", "(schemes: inproc, tcp"),
-    ("tcp://127.0.0.1:99999", "(a host and a port 1..65535), found 'tcp://127.0.0.1:99999'"),
-    ("", "found ''"),
-])
-def test_a_bad_scheduler_address_is_one_line_and_nothing_after(tmp_path, address, words):
-    done = subprocess.run([sys.executable, "-m", "armkit", "workspace", "ur5", "-n", "1000",
-                           "--out", str(tmp_path), "--scheduler", address],
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 2
-    assert done.stderr.strip().splitlines() == [done.stderr.strip()], done.stderr
-    assert words in done.stderr and "Traceback" not in done.stderr
+def test_a_bad_scheduler_address_is_one_line_and_nothing_after(tmp_path):
+    # These two once printed their line, then, as the process ended, a Client's 20 s close and
+    # an "Exception ignored ... TimeoutError" traceback. The other bad addresses are in
+    # test_bad_input_table.
+    rows = {"127.0.0.1": "expected an address such as tcp://127.0.0.1:8786, found '127.0.0.1'",
+            "bogus://127.0.0.1:5": "(schemes: inproc, tcp"}
+    processes = {address: subprocess.Popen(
+        [sys.executable, "-m", "armkit", "workspace", "ur5", "-n", "1000", "--out",
+         str(tmp_path), "--scheduler", address], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True) for address in rows}
+    for address, process in processes.items():
+        _, stderr = process.communicate(timeout=300)
+        assert process.returncode == 2
+        assert stderr.strip().splitlines() == [stderr.strip()], stderr
+        assert rows[address] in stderr and "Traceback" not in stderr
 
 
 def test_without_a_terminal_a_long_run_says_how_long_before_it_goes_on(tmp_path, monkeypatch):
     monkeypatch.setattr(command, "PROGRESS_FROM", 1)
     monkeypatch.setattr(command, "ESTIMATE_FROM", 0.0)
-    result = run("workspace", "ur5", "-n", "600000", "--out", str(tmp_path), "--json")
+    result = run("workspace", "ur5", "-n", "300000", "--out", str(tmp_path), "--json")
     assert result.exit_code == 0, result.stderr
     lines = result.stderr.splitlines()
-    assert lines[0].startswith("sampling 600,000 joint vectors: about ") and " left" in lines[0]
+    assert lines[0].startswith("sampling 300,000 joint vectors: about ") and " left" in lines[0]
     assert any(line.startswith("sampled ") for line in lines[1:])
-    assert json.loads(result.stdout)["samples"] == 600_000
+    assert json.loads(result.stdout)["samples"] == 300_000

@@ -112,3 +112,12 @@ def test_bad_joint_selection():
 def test_the_shipped_table1_pictures_are_small(name):
     path = ROOT / "docs" / "figures" / name
     assert path.exists() and path.stat().st_size < 400_000
+
+
+def test_a_limit_the_curve_goes_far_beyond_is_drawn():
+    robot = armkit.robot("ur5")
+    tr = quintic(np.zeros(6), robot.q_to_si([90, 0, 0, 0, 0, 0]), 0.1)     # 1688 deg/s
+    fig = motion_figure(robot, tr, [0])
+    velocity = fig.axes[1]
+    assert _dashed_levels(velocity) == [pytest.approx(180.0)]
+    assert max(velocity.lines[0].get_ydata()) > 9 * 180

@@ -8,7 +8,6 @@ import numpy as np
 import typer
 from rich.table import Table
 
-import armkit
 from armkit.cli.app import EXIT_FAILED, JsonFlag, SiFlag, app, print_json, stdout
 from armkit.cli.robots import RobotArg
 from armkit.cli.values import load_robot, number, parse_numbers

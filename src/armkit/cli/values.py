@@ -1,7 +1,7 @@
 """Numbers and robots at the command line's edge: one check for every value a user types.
 
-Every number an `armkit` command takes goes through `check_number`, either as a click type
-(`Number`, for options and arguments that are single numbers) or through `parse_numbers` (for
+Every number an `armkit` command takes goes through `check_number`, either as a parser
+(`number`, for options and arguments that are single numbers) or through `parse_numbers` (for
 lists typed as one string, ``--q0 "0 -90 90 0 0 0"`` or ``--start=0,-90,...``). A value that is
 not a number, not finite, or outside the range that makes sense for it is refused before any
 work, with one message naming the argument, what was expected and what was found.

@@ -109,14 +109,18 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
             for knot in tr.knots:
                 ax.axvline(knot, color="0.6", lw=0.8, ls=":")
             ax.grid(alpha=0.3)
-            if row == 0:
+            if row == 0 and len(trajectories) > 1:
                 ax.set_title(name)
             if col == 0:
                 ax.set_ylabel(f"{QUANTITIES[row]} ({_units(robot, joints, row)})")
             if row == rows - 1:
                 ax.set_xlabel("t (s)")
     _legend(fig, axes[0, -1], limits_drawn=_any_drawn(axes))
-    fig.suptitle(title or f"{robot.name}: " + ", ".join(trajectories), fontsize=12)
+    if title is None:
+        title = f"{robot.name}: " + ", ".join(trajectories)
+    elif len(trajectories) == 1:        # one column, untitled: its name in the one title
+        title += f" ({next(iter(trajectories))})"
+    fig.suptitle(title, fontsize=12)
     return fig
 
 
@@ -141,11 +145,13 @@ _LIMIT_STYLE = {"ls": "--", "lw": 1.0, "alpha": 0.8}
 def _draw_limit(ax, bounds: NDArray, values: NDArray, colour: str,
                 label: str | None = None) -> bool:
     """Dashed lines at a joint's limits (file units) where the curve comes within a tenth of
-    its span of them, or beyond; the other limit lines would only squash the curves."""
+    its span of them, or goes beyond; the other limit lines would only squash the curves."""
     drawn = False
-    span = max(float(np.ptp(values)), 1e-12)
-    for bound, extreme in zip(bounds, (values.min(), values.max())):
-        if np.isfinite(bound) and abs(extreme - bound) <= 0.1 * max(span, abs(bound)):
+    near = 0.1 * max(float(np.ptp(values)), 1e-12)
+    lower, upper = bounds
+    for bound, reached in ((lower, values.min() <= lower + near),
+                           (upper, values.max() >= upper - near)):
+        if np.isfinite(bound) and reached:
             ax.axhline(bound, color=colour, label=label, **_LIMIT_STYLE)
             drawn, label = True, None
     return drawn
