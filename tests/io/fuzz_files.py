@@ -561,7 +561,7 @@ def _check(case: dict) -> dict:
     try:
         robot = _load(case)
     except armkit.ArmkitError as err:
-        return {"outcome": "refused", "message": str(err)[:300],
+        return {"outcome": "refused", "message": str(err)[:1000],
                 "seconds": time.perf_counter() - start}
     except BaseException as err:                  # noqa: BLE001 - the failure being counted
         return {"outcome": "crashed", "message": f"{type(err).__name__}: {str(err)[:300]}",
@@ -666,6 +666,8 @@ def judge(case: Case, result: dict | None) -> str | None:
         message = result["message"]
         if not (message.startswith(case.path) or case.also and message.startswith(case.also)):
             return f"refusal does not name the file: {message}"
+        if "\n" in message:
+            return f"refusal is not one line: {message!r}"
         if case.expect == "same":
             return f"a file with the same model was refused: {message}"
         if case.field and case.field not in message:

@@ -40,6 +40,7 @@ def test_the_judge_counts_what_breaks_the_rules():
     assert "accepted" in judge(case, {"outcome": "loaded", "finite": True, "same": None})
     assert "does not name 'joints[1].a'" in judge(case, {**good, "message": "/f.yaml: other"})
     assert "does not name the file" in judge(case, {**good, "message": "joints[1].a: x"})
+    assert "not one line" in judge(case, {**good, "message": good["message"] + "\nmore"})
     same = Case("urdf", "/g.urdf", "same", "meshes")
     assert "different model" in judge(same, {"outcome": "loaded", "finite": True, "same": False})
     either = Case("urdf", "/g.urdf", "either", "bytes damaged")

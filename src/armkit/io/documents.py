@@ -135,14 +135,20 @@ def read_yaml(path: str | Path, max_bytes: int = MAX_BYTES) -> Any:
     text = read_text(path, max_bytes)
     try:
         return yaml.load(text, Loader=_UniqueKeyLoader)
+    except yaml.reader.ReaderError as err:        # a character YAML does not allow
+        line = text.count("\n", 0, err.position) + 1
+        code = err.character if isinstance(err.character, int) else ord(err.character[:1] or " ")
+        raise ModelFileError(str(path), f"line {line}", "valid YAML",
+                             f"unacceptable character U+{code:04X}: {err.reason}") from None
     except yaml.YAMLError as err:
         mark = getattr(err, "problem_mark", None)
         where = f"line {mark.line + 1}" if mark else ""
-        problem = getattr(err, "problem", None) or str(err)
+        problem = " ".join(str(getattr(err, "problem", None) or err).split())
         raise ModelFileError(str(path), where, "valid YAML", _cut(problem, 120)) from None
     except (ValueError, OverflowError, TypeError, RecursionError) as err:
         # Raised by PyYAML's constructors for values it parses but cannot build.
-        raise ModelFileError(str(path), "", "valid YAML", _cut(str(err), 120)) from None
+        raise ModelFileError(str(path), "", "valid YAML",
+                             _cut(" ".join(str(err).split()), 120)) from None
 
 
 def kind_of(value: Any) -> str:
