@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from armkit.errors import InputError
+from armkit.io.clouds import Cloud, check_scale, read_cloud
 from armkit.perception.clusters import dbscan
 from armkit.perception.filters import statistical_outliers, voxel_downsample
 from armkit.perception.plane import Plane, fit_plane_lsq, points_array, ransac_plane
@@ -492,8 +493,6 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     InputError, ModelFileError
         Bad arguments, an empty cloud, NaN/inf in an array, an unreadable or implausible file.
     """
-    from armkit.io.clouds import Cloud, check_scale, read_cloud
-
     info: dict = {}
     if units is not None and not isinstance(cloud_or_path, (str, Path)):
         raise InputError(f"units: applies to a cloud file; points given as an array are in m, "
@@ -506,7 +505,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
         p = cloud_or_path.points
     else:
         p = points_array(cloud_or_path)
-        check_scale(p, "points")
+        check_scale(p, "points", file=False)
     if kind not in ("pipe", "hole"):
         raise InputError(f"kind: expected 'pipe' or 'hole', found {kind!r}")
     if choose not in CHOICES:
