@@ -189,7 +189,8 @@ class TargetResult:
         Fitted radius (the known one when given).
     radius_known : bool
     plane : Plane or None
-        The wall (after the final refit), over `points`.
+        The wall (after the final refit), over `points`; None when no plane holds enough
+        points to be the wall.
     plane_inliers : int
     plane_rms : float
     candidates : int
@@ -527,7 +528,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     plane = ransac_plane(p, plane_threshold, refits=1, seed=seed)
     if plane.inliers.sum() < max(50, 0.05 * n):
         return _fail(f"no wall: the best plane holds {int(plane.inliers.sum())} of {n} points",
-                     kind, radius, p, plane, info)
+                     kind, radius, p, None, info)
     u, v = _plane_basis(plane.normal)
     origin = -plane.offset * plane.normal            # the sensor's foot on the wall
     # (n, 2) coordinates along the wall. Two matrix-vector products, not one (n, 3) @ (3, 2)
