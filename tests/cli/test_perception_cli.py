@@ -62,7 +62,7 @@ def test_text_output_and_no_target_exit_1(tmp_path):
     (["missing.pcd"], "missing.pcd: expected a readable file"),
     (["{bad}"], "bad.pcd: expected a PCD file (starting with #, VERSION or FIELDS), found "),
     (["{npy}"], "a.npy: units: expected a length unit, m or mm, declared in the file or given"),
-    (["{npy}", "--units", "cm"], "units: expected one of m, mm, found 'cm'"),
+    (["{npy}", "--units", "cm"], "--units: expected one of m, mm, found 'cm'"),
     (["{npy}", "--units", "mm"], "a.npy: points: expected a scene at least 5 cm across"),
     ([SCAN, "--units", "m"], "inlet_scan.pcd: units: expected m as given by the caller, found "
                              "the file declares mm"),
@@ -70,6 +70,10 @@ def test_text_output_and_no_target_exit_1(tmp_path):
     ([SCAN, "--choose", "first"], "--choose: expected one of largest, nearest, highest, found"),
     ([SCAN, "--nonfinite", "keep"], "--nonfinite: expected one of drop, refuse, found 'keep'"),
     ([SCAN, "--radius", "-4"], "--radius: expected a positive radius in mm, found -4"),
+    ([SCAN, "--radius", "nan"], "--radius: expected a positive radius in mm, found nan"),
+    ([SCAN, "--radius", "4cm"], "--radius: expected a positive radius in the cloud's units, "
+                                "found '4cm'"),
+    ([SCAN, "--out", "{file}"], "--out: expected a folder armkit can write, found "),
     ([SCAN, "--sensor-to-base", "{tf}"], "tf.yaml: units: expected a value, found nothing"),
     (["{nan}", "--units", "m", "--nonfinite", "refuse"], "n.npy: points: expected finite coordinates, found 1 "
                                          "point(s) with NaN or inf, the first at index 0"),
@@ -81,7 +85,9 @@ def test_bad_input_one_line_exit_2(tmp_path, args, message):
     nan[0, 0] = np.nan
     np.save(tmp_path / "n.npy", nan)
     (tmp_path / "tf.yaml").write_text("xyz: [0, 0, 0]\nrpy: [0, 0, 0]\n")
+    (tmp_path / "plain").write_text("a file, not a folder")
     files = {"{bad}": tmp_path / "bad.pcd", "{npy}": tmp_path / "a.npy",
+             "{file}": tmp_path / "plain" / "sub",
              "{tf}": tmp_path / "tf.yaml", "{nan}": tmp_path / "n.npy"}
     files["missing.pcd"] = tmp_path / "missing.pcd"
     args = [str(files[a]) if a in files else a for a in args]

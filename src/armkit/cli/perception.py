@@ -12,7 +12,7 @@ from armkit.cli.app import EXIT_FAILED, JsonFlag, app, output_folder, print_json
 from armkit.errors import InputError
 from armkit.spatial import matrix_to_rpy
 
-_CHOICES = {"units": ("m", "mm"), "--kind": ("pipe", "hole"),
+_CHOICES = {"--units": ("m", "mm"), "--kind": ("pipe", "hole"),
             "--nonfinite": ("drop", "refuse"), "--choose": ("largest", "nearest", "highest")}
 
 
@@ -41,7 +41,7 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
                help="The cloud's length unit, m or mm (needed unless the file declares it).")]
            = None,
            kind: Annotated[str, typer.Option(help="pipe or hole.")] = "pipe",
-           radius: Annotated[float | None, typer.Option(
+           radius: Annotated[str | None, typer.Option(
                help="Known inlet radius, in the cloud's units (default: fitted).")] = None,
            nonfinite: Annotated[str, typer.Option(
                help="Points with NaN or inf: drop (and count) or refuse.")] = "drop",
@@ -56,7 +56,15 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
     from armkit.perception import detect_target
 
     if units is not None:
-        _one_of("units", units)
+        _one_of("--units", units)
+    # Parsed here, not by typer: a bad value is then one line like every other bad input.
+    radius_value = None
+    if radius is not None:
+        try:
+            radius_value = float(radius)
+        except ValueError:
+            raise InputError(f"--radius: expected a positive radius in the cloud's units, "
+                             f"found {radius!r}") from None
     _one_of("--kind", kind)
     _one_of("--nonfinite", nonfinite)
     _one_of("--choose", choose)
@@ -64,10 +72,10 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
     T_base_sensor = read_sensor_to_base(sensor_to_base) if sensor_to_base is not None else None
     data = read_cloud(cloud, units, nonfinite=nonfinite)
     k = 1.0 / UNITS[data.units]
-    if radius is not None and not (np.isfinite(radius) and radius > 0):
-        raise InputError(f"--radius: expected a positive radius in {data.units}, found {radius:g}")
+    if radius_value is not None and not (np.isfinite(radius_value) and radius_value > 0):
+        raise InputError(f"--radius: expected a positive radius in {data.units}, found {radius}")
     result = detect_target(data, kind=kind, choose=choose,
-                           radius=None if radius is None else radius / k,
+                           radius=None if radius_value is None else radius_value / k,
                            T_base_sensor=T_base_sensor)
     figure = None
     if folder is not None:
