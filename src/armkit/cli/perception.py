@@ -38,8 +38,9 @@ def _pose(T: np.ndarray, k: float) -> dict:
     """A pose as the CLI prints it: position in the file's length unit, axis, rpy in deg."""
     M = T.copy()
     M[:3, 3] *= k
-    return {"position": M[:3, 3], "axis": T[:3, 2],
-            "rpy_deg": matrix_to_rpy(T[:3, :3], degrees=True), "matrix": M}
+    rpy = matrix_to_rpy(T[:3, :3], degrees=True)
+    rpy[np.abs(rpy) < 1e-9] = 0.0           # rounding dust, e.g. 1e-14 deg of pitch
+    return {"position": M[:3, 3], "axis": T[:3, 2], "rpy_deg": rpy, "matrix": M}
 
 
 @app.command()
