@@ -28,7 +28,7 @@ UNITS = {"m": 1.0, "mm": 1e-3}
 SUFFIXES = (".pcd", ".ply", ".csv", ".xyz", ".txt", ".npy")
 MIN_EXTENT = 0.05           # m: smaller scenes are taken for metres read as millimetres
 MAX_RANGE = 1000.0          # m: larger median ranges are taken for millimetres read as metres
-_UNIT_COMMENT = re.compile(rb"units?\s*[:=]?\s*(mm|m)\b", re.IGNORECASE)
+_UNIT_COMMENT = re.compile(rb"\bunits?\s*[:=]?\s*(mm|m)\b", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
