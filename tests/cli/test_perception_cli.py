@@ -62,14 +62,20 @@ def test_text_output_and_no_target_exit_1(tmp_path):
     (["missing.pcd"], "missing.pcd: expected a readable file"),
     (["{bad}"], "bad.pcd: expected a PCD file (starting with #, VERSION or FIELDS), found "),
     (["{npy}"], "a.npy: units: expected a length unit, m or mm, declared in the file or given"),
-    (["{npy}", "--units", "cm"], "units: expected one of m, mm, found 'cm'"),
+    (["{npy}", "--units", "cm"], "--units: expected one of m, mm, found 'cm'"),
     (["{npy}", "--units", "mm"], "a.npy: points: expected a scene at least 5 cm across"),
     ([SCAN, "--units", "m"], "inlet_scan.pcd: units: expected m as given by the caller, found "
                              "the file declares mm"),
     ([SCAN, "--kind", "slot"], "--kind: expected one of pipe, hole, found 'slot'"),
     ([SCAN, "--choose", "first"], "--choose: expected one of largest, nearest, highest, found"),
     ([SCAN, "--nonfinite", "keep"], "--nonfinite: expected one of drop, refuse, found 'keep'"),
-    ([SCAN, "--radius", "-4"], "--radius: expected a positive radius in mm, found -4"),
+    ([SCAN, "--radius", "-4"], "--radius: expected a positive length in mm, found -4"),
+    ([SCAN, "--radius", "nan"], "--radius: expected a positive length in mm, found nan"),
+    ([SCAN, "--radius", "4cm"], "--radius: expected a positive length in the cloud's units, "
+                                "found '4cm'"),
+    ([SCAN, "--eps", "0"], "--eps: expected a positive length in mm, found 0"),
+    ([SCAN, "--eps", "x"], "--eps: expected a positive length in the cloud's units, found 'x'"),
+    ([SCAN, "--out", "{file}"], "--out: expected a folder armkit can write, found "),
     ([SCAN, "--sensor-to-base", "{tf}"], "tf.yaml: units: expected a value, found nothing"),
     (["{nan}", "--units", "m", "--nonfinite", "refuse"], "n.npy: points: expected finite coordinates, found 1 "
                                          "point(s) with NaN or inf, the first at index 0"),
@@ -81,7 +87,9 @@ def test_bad_input_one_line_exit_2(tmp_path, args, message):
     nan[0, 0] = np.nan
     np.save(tmp_path / "n.npy", nan)
     (tmp_path / "tf.yaml").write_text("xyz: [0, 0, 0]\nrpy: [0, 0, 0]\n")
+    (tmp_path / "plain").write_text("a file, not a folder")
     files = {"{bad}": tmp_path / "bad.pcd", "{npy}": tmp_path / "a.npy",
+             "{file}": tmp_path / "plain" / "sub",
              "{tf}": tmp_path / "tf.yaml", "{nan}": tmp_path / "n.npy"}
     files["missing.pcd"] = tmp_path / "missing.pcd"
     args = [str(files[a]) if a in files else a for a in args]
@@ -89,6 +97,19 @@ def test_bad_input_one_line_exit_2(tmp_path, args, message):
     assert result.exit_code == 2, result.output
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0] and result.stdout == ""
+
+
+def test_eps_in_the_clouds_units_for_a_ring_scan(tmp_path):
+    scene = synthetic_scene(noise=0.002, n_points=20_000, rings=24, seed=3)
+    path = write_pcd(tmp_path / "rings.pcd", scene.points, "mm")
+    result = runner.invoke(app, ["detect", str(path), "--radius", "40", "--eps", "40",
+                                 "--json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    truth = scene.T_sensor_target[:3, 3] * 1000
+    axis = scene.T_sensor_target[:3, 2]
+    d = np.array(doc["sensor"]["position"]) - truth
+    assert np.linalg.norm(d - (d @ axis) * axis) < 1.5                 # mm, off the axis
 
 
 def test_bad_input_in_a_subprocess(tmp_path):

@@ -172,3 +172,22 @@ def test_from_a_file_with_nan_points(tmp_path):
     mine = scene.points.copy()
     detect_target(mine, radius=0.04)
     mine[0] = 0.0                                             # the caller's array stays theirs
+
+
+def test_sparse_rings_need_a_larger_eps_and_say_so():
+    scene = synthetic_scene(noise=0.002, n_points=20_000, rings=24, seed=3)
+    short = detect_target(scene.points, radius=0.04)       # one ring's arc: no silent answer
+    assert not short.success and "too short an arc" in short.reason
+    joined = detect_target(scene.points, radius=0.04, eps=0.04)
+    assert joined.success and errors(joined, scene)[0] < 1e-3
+
+
+def test_known_radius_on_a_short_arc_fits_both_sides():
+    a = np.linspace(-0.3, 0.3, 40)
+    xy = np.column_stack([0.04 * np.cos(a), 0.04 * np.sin(a)])   # centre (0, 0), arc at +x
+    from armkit.perception import fit_circle
+    near = fit_circle(xy, 0.04, start=[0.01, 0.0])
+    far = fit_circle(xy, 0.04, start=[0.07, 0.0])
+    np.testing.assert_allclose(near.centre, [0, 0], atol=1e-9)
+    assert far.centre[0] > 0.075 and abs(far.centre[1]) < 1e-9    # the mirror image fits too,
+    assert far.rms > 10 * near.rms                                # if worse

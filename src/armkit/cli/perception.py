@@ -12,7 +12,7 @@ from armkit.cli.app import EXIT_FAILED, JsonFlag, app, output_folder, print_json
 from armkit.errors import InputError
 from armkit.spatial import matrix_to_rpy
 
-_CHOICES = {"units": ("m", "mm"), "--kind": ("pipe", "hole"),
+_CHOICES = {"--units": ("m", "mm"), "--kind": ("pipe", "hole"),
             "--nonfinite": ("drop", "refuse"), "--choose": ("largest", "nearest", "highest")}
 
 
@@ -23,12 +23,24 @@ def _one_of(name: str, value: str) -> str:
     return value
 
 
+def _length(name: str, text: str | None) -> float | None:
+    """An option's number (the cloud's units), or None; its sign is checked with the units."""
+    if text is None:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise InputError(f"{name}: expected a positive length in the cloud's units, "
+                         f"found {text!r}") from None
+
+
 def _pose(T: np.ndarray, k: float) -> dict:
     """A pose as the CLI prints it: position in the file's length unit, axis, rpy in deg."""
     M = T.copy()
     M[:3, 3] *= k
-    return {"position": M[:3, 3], "axis": T[:3, 2],
-            "rpy_deg": matrix_to_rpy(T[:3, :3], degrees=True), "matrix": M}
+    rpy = matrix_to_rpy(T[:3, :3], degrees=True)
+    rpy[np.abs(rpy) < 1e-9] = 0.0           # rounding dust, e.g. 1e-14 deg of pitch
+    return {"position": M[:3, 3], "axis": T[:3, 2], "rpy_deg": rpy, "matrix": M}
 
 
 @app.command()
@@ -41,8 +53,11 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
                help="The cloud's length unit, m or mm (needed unless the file declares it).")]
            = None,
            kind: Annotated[str, typer.Option(help="pipe or hole.")] = "pipe",
-           radius: Annotated[float | None, typer.Option(
+           radius: Annotated[str | None, typer.Option(
                help="Known inlet radius, in the cloud's units (default: fitted).")] = None,
+           eps: Annotated[str | None, typer.Option(
+               help="Clustering radius in the cloud's units (default: 4 x the wall's point "
+                    "spacing; give it for ring scans whose rings lie farther apart).")] = None,
            nonfinite: Annotated[str, typer.Option(
                help="Points with NaN or inf: drop (and count) or refuse.")] = "drop",
            choose: Annotated[str, typer.Option(
@@ -56,7 +71,9 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
     from armkit.perception import detect_target
 
     if units is not None:
-        _one_of("units", units)
+        _one_of("--units", units)
+    # Parsed here, not by typer: a bad value is then one line like every other bad input.
+    radius_value, eps_value = _length("--radius", radius), _length("--eps", eps)
     _one_of("--kind", kind)
     _one_of("--nonfinite", nonfinite)
     _one_of("--choose", choose)
@@ -64,10 +81,12 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
     T_base_sensor = read_sensor_to_base(sensor_to_base) if sensor_to_base is not None else None
     data = read_cloud(cloud, units, nonfinite=nonfinite)
     k = 1.0 / UNITS[data.units]
-    if radius is not None and not (np.isfinite(radius) and radius > 0):
-        raise InputError(f"--radius: expected a positive radius in {data.units}, found {radius:g}")
+    for name, text, value in (("--radius", radius, radius_value), ("--eps", eps, eps_value)):
+        if value is not None and not (np.isfinite(value) and value > 0):
+            raise InputError(f"{name}: expected a positive length in {data.units}, found {text}")
     result = detect_target(data, kind=kind, choose=choose,
-                           radius=None if radius is None else radius / k,
+                           radius=None if radius_value is None else radius_value / k,
+                           eps=None if eps_value is None else eps_value / k,
                            T_base_sensor=T_base_sensor)
     figure = None
     if folder is not None:

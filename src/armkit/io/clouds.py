@@ -28,7 +28,7 @@ UNITS = {"m": 1.0, "mm": 1e-3}
 SUFFIXES = (".pcd", ".ply", ".csv", ".xyz", ".txt", ".npy")
 MIN_EXTENT = 0.05           # m: smaller scenes are taken for metres read as millimetres
 MAX_RANGE = 1000.0          # m: larger median ranges are taken for millimetres read as metres
-_UNIT_COMMENT = re.compile(rb"units?\s*[:=]?\s*(mm|m)\b", re.IGNORECASE)
+_UNIT_COMMENT = re.compile(rb"\bunits?\s*[:=]?\s*(mm|m)\b", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -53,15 +53,22 @@ class Cloud:
     path: str
 
 
-def check_scale(points: NDArray, source: str, field: str = "points") -> None:
+def check_scale(points: NDArray, source: str, *, file: bool = True) -> None:
     """Refuse points (m) whose scale suggests the wrong unit.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, 3), m
+    source : str
+        The file the points came from, or the argument's name.
+    file : bool
+        Whether `source` is a file (a ModelFileError) or an argument (an InputError).
 
     Raises
     ------
     ModelFileError or InputError
         When the middle 98 % of the points spans less than 5 cm, or their median distance from
-        the sensor exceeds 1 km. A ModelFileError names `source` as the file; with
-        ``field == source`` (an array) it is an InputError.
+        the sensor exceeds 1 km.
     """
     sample = points[::max(len(points) // 10_000, 1)]        # a few thousand points suffice
     lo, hi = np.percentile(sample, [1, 99], axis=0)
@@ -76,9 +83,9 @@ def check_scale(points: NDArray, source: str, field: str = "points") -> None:
                    "millimetres read as metres grows 1000 times)",
                    f"a median range of {median_range:.4g} m")
     if problem:
-        if field == source:
+        if not file:
             raise InputError(f"{source}: expected {problem[0]}, found {problem[1]}")
-        raise ModelFileError(source, field, *problem)
+        raise ModelFileError(source, "points", *problem)
 
 
 def _declared_unit(path: str, comments: list[bytes]) -> str | None:

@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
 
 from armkit.errors import InputError
+from armkit.io.clouds import Cloud, check_scale, read_cloud
 from armkit.perception.clusters import dbscan
 from armkit.perception.filters import statistical_outliers, voxel_downsample
 from armkit.perception.plane import Plane, fit_plane_lsq, points_array, ransac_plane
@@ -48,6 +49,7 @@ from armkit.perception.synthetic import target_frame
 from armkit.spatial import as_transform
 
 CHOICES = ("largest", "nearest", "highest")
+MIN_ARC = np.deg2rad(60.0)      # rad: a shorter arc does not pin a circle's centre down
 
 
 @dataclass(frozen=True)
@@ -113,7 +115,7 @@ def _coverage(angles: NDArray) -> float:
 
 
 def fit_circle(xy: ArrayLike, radius: float | None = None, *, passes: int = 2,
-               cut: float = 3.0) -> Circle:
+               cut: float = 3.0, start: ArrayLike | None = None) -> Circle:
     """Circle through 2-D points: algebraic start, geometric least squares, robust passes.
 
     Parameters
@@ -125,6 +127,9 @@ def fit_circle(xy: ArrayLike, radius: float | None = None, *, passes: int = 2,
         Times points with a residual beyond `cut` robust standard deviations (1.4826 MAD, at
         least 1e-4 of the radius) are set aside and the fit redone.
     cut : float
+    start : array_like, shape (2,), optional
+        Where the iterations start from, instead of the algebraic fit's centre (on a short arc
+        a known radius fits on either side of it).
 
     Returns
     -------
@@ -143,7 +148,10 @@ def fit_circle(xy: ArrayLike, radius: float | None = None, *, passes: int = 2,
     if known and not (np.isfinite(radius) and radius > 0):
         raise InputError(f"radius: expected a positive radius, found {radius}")
     centre, r = _kasa(p)
-    if known:
+    if start is not None:
+        centre = np.asarray(start, float)
+        r = float(radius) if known else float(np.linalg.norm(p - centre, axis=1).mean())
+    elif known:
         # Start from the algebraic centre moved so that the known radius fits the arc: on a
         # short arc the algebraic radius is off, the direction to the arc is not.
         mean = p.mean(axis=0)
@@ -188,7 +196,8 @@ class TargetResult:
         Fitted radius (the known one when given).
     radius_known : bool
     plane : Plane or None
-        The wall (after the final refit), over `points`.
+        The wall (after the final refit), over `points`; None when no plane holds enough
+        points to be the wall.
     plane_inliers : int
     plane_rms : float
     candidates : int
@@ -492,8 +501,6 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     InputError, ModelFileError
         Bad arguments, an empty cloud, NaN/inf in an array, an unreadable or implausible file.
     """
-    from armkit.io.clouds import Cloud, check_scale, read_cloud
-
     info: dict = {}
     if units is not None and not isinstance(cloud_or_path, (str, Path)):
         raise InputError(f"units: applies to a cloud file; points given as an array are in m, "
@@ -506,7 +513,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
         p = cloud_or_path.points
     else:
         p = points_array(cloud_or_path)
-        check_scale(p, "points")
+        check_scale(p, "points", file=False)
     if kind not in ("pipe", "hole"):
         raise InputError(f"kind: expected 'pipe' or 'hole', found {kind!r}")
     if choose not in CHOICES:
@@ -528,7 +535,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     plane = ransac_plane(p, plane_threshold, refits=1, seed=seed)
     if plane.inliers.sum() < max(50, 0.05 * n):
         return _fail(f"no wall: the best plane holds {int(plane.inliers.sum())} of {n} points",
-                     kind, radius, p, plane, info)
+                     kind, radius, p, None, info)
     u, v = _plane_basis(plane.normal)
     origin = -plane.offset * plane.normal            # the sensor's foot on the wall
     # (n, 2) coordinates along the wall. Two matrix-vector products, not one (n, 3) @ (3, 2)
@@ -592,6 +599,23 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
             origin = -plane.offset * plane.normal
             q = p[members] - origin
             circle = fit_circle(np.column_stack([q @ u, q @ v]), radius)
+        # Only the side of the pipe facing the sensor is seen, so the centre lies farther
+        # from the sensor's foot on the wall (0, 0) than the seen arc does. On a short arc a
+        # known radius also fits the mirror image: then start again from the other side.
+        arc = np.column_stack([(p[members] - origin) @ u, (p[members] - origin) @ v])
+        middle = arc[circle.used].mean(axis=0)
+        if np.linalg.norm(circle.centre) < np.linalg.norm(middle):
+            mirrored = fit_circle(arc, radius, start=2 * middle - circle.centre)
+            if np.linalg.norm(mirrored.centre) < np.linalg.norm(arc[mirrored.used].mean(axis=0)):
+                return _fail("the fitted circle lies on the sensor's side of the points it was "
+                             "fitted to, from either side (not a pipe seen from the side?)",
+                             kind, radius, p, plane, info)
+            circle = mirrored
+        if circle.coverage < MIN_ARC:
+            return _fail(f"the points span {np.degrees(circle.coverage):.0f} deg of the circle, "
+                         f"fewer than {np.degrees(MIN_ARC):.0f}: too short an arc to fit "
+                         "(a smaller eps may split the cluster; a larger one may join it)",
+                         kind, radius, p, plane, info)
         if not (np.isfinite(circle.radius) and 0 < circle.radius <= extent):
             return _fail(f"circle fit failed: radius {circle.radius * 1e3:.1f} mm is not "
                          f"within 0 .. {extent * 1e3:.0f} mm", kind, radius, p, plane, info)
