@@ -458,9 +458,9 @@ def workspace(robot: Robot, n: int, *, seed: int | None = 0, resolution: float |
 
     Joint vectors are drawn uniformly inside the joint limits (rad for revolute, m for
     prismatic joints), `Robot.sampling_limits`: a revolute joint without finite limits, such
-    as a URDF continuous joint, is drawn over one turn. Tool positions come from `armkit.fk`, chunk by chunk, and
-    are reduced as they come: memory depends on the chunk size and the number of occupied
-    voxels, not on n.
+    as a URDF continuous joint, is drawn over one turn. Tool positions come from `armkit.fk`,
+    chunk by chunk, and are reduced as they come: memory depends on the chunk size and the
+    number of occupied voxels, not on n.
 
     Parameters
     ----------
