@@ -5,8 +5,12 @@ A `Scene` of obstacles (`Box`, `Sphere`, `Cylinder`, `Capsule`), the arm as caps
 once per robot and scene, planners that take any validity checker (RRT, RRT-Connect, RRT*),
 shortcutting and resampling, and `plan`, which does it all and returns a `PlanResult`.
 
+The shelf of the benchmark: from the lower compartment to the upper one, around a plate.
+
 >>> arm = armkit.robot("inspection_6dof")
 >>> shelf = Scene([Box.from_bounds([0.65, -0.5, 0.2], [1.1, 0.5, 0.24])])
+>>> q_start = [0.5567789, -1.5882119, 1.3545770, -2.3713940, 2.2182614, -2.4618970]
+>>> q_goal = [-0.8764912, -0.4068011, -1.3528886, 1.6921273, -0.9314323, 2.2978917]
 >>> result = plan(arm, q_start, q_goal, scene=shelf, waypoints=10, seed=1)
 >>> result.success, result.path.shape
 (True, (10, 6))
