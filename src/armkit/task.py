@@ -371,10 +371,14 @@ def _trajectory(result: JobResult, checker) -> bool:
         dense = resample_keeping_vertices(path, 1 + per_segment * (len(path) - 1))
         timed = retime(waypoint_path(dense), V, A)
         if timed.success and _certified(timed.trajectory, checker):
+            from armkit.trajectory import Trajectory
+
             tr = timed.trajectory
             s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(dense, axis=0), axis=1))]
-            at = np.searchsorted(s, vertices - 1e-12)
-            result.trajectory, result.t, result.q = tr, tr.knots[at], path
+            t = tr.knots[np.searchsorted(s, vertices - 1e-12)]
+            # Its knots: the times it passes the waypoints (not the densified points).
+            result.trajectory = Trajectory(tr.breaks, tr.coefficients, t, "smoothed path")
+            result.t, result.q = t, path
             result.trajectory_note = (f"cubic spline through the path ({per_segment} points per "
                                       f"segment), time-optimal within the limits, certified")
             return True
