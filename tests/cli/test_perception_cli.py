@@ -14,7 +14,8 @@ from typer.testing import CliRunner
 
 from armkit.cli import app
 from armkit.io.clouds import write_pcd
-from armkit.io.sensor_transform import read_sensor_to_base
+from armkit.calibration import camera_to_base
+from armkit.io.camera import read_camera_mount
 from armkit.perception import detect_target, synthetic_scene
 
 EXAMPLES = Path(__file__).parents[2] / "examples" / "perception"
@@ -32,7 +33,7 @@ def test_example_scan_json_in_millimetres_with_base_frame_and_picture(tmp_path):
                   "--out", str(tmp_path))
     assert done.returncode == 0, done.stderr
     doc = json.loads(done.stdout)
-    expected = detect_target(SCAN, radius=0.04, T_base_sensor=read_sensor_to_base(POSE))
+    expected = detect_target(SCAN, radius=0.04, T_base_sensor=camera_to_base(read_camera_mount(POSE)))
     assert doc["success"] and doc["units"] == "mm" and doc["radius"] == pytest.approx(40)
     np.testing.assert_allclose(doc["sensor"]["position"], expected.centre * 1000, atol=1e-9)
     np.testing.assert_allclose(doc["base"]["position"], expected.T_base_target[:3, 3] * 1000,
@@ -86,7 +87,7 @@ def test_bad_input_one_line_exit_2(tmp_path, args, message):
     nan = synthetic_scene(n_points=500).points
     nan[0, 0] = np.nan
     np.save(tmp_path / "n.npy", nan)
-    (tmp_path / "tf.yaml").write_text("xyz: [0, 0, 0]\nrpy: [0, 0, 0]\n")
+    (tmp_path / "tf.yaml").write_text("camera_to_base: {xyz: [0, 0, 0], rpy: [0, 0, 0]}\n")
     (tmp_path / "plain").write_text("a file, not a folder")
     files = {"{bad}": tmp_path / "bad.pcd", "{npy}": tmp_path / "a.npy",
              "{file}": tmp_path / "plain" / "sub",

@@ -47,8 +47,10 @@ def _pose(T: np.ndarray, k: float) -> dict:
 def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .csv, .xyz, "
                                                        ".txt or .npy.")],
            sensor_to_base: Annotated[Path | None, typer.Option(
-               "--sensor-to-base", help="YAML file with the sensor's pose in the robot's base "
-                                        "frame (xyz/rpy or a 4x4 matrix, with units).")] = None,
+               "--sensor-to-base", help="The sensor's pose in the robot's base frame: a "
+                                        "camera-to-base file (units, camera_to_base: xyz/rpy "
+                                        "or a matrix) or an eye-to-hand hand-eye result.")]
+           = None,
            units: Annotated[str | None, typer.Option(
                help="The cloud's length unit, m or mm (needed unless the file declares it).")]
            = None,
@@ -67,7 +69,8 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
            as_json: JsonFlag = False) -> None:
     """The inlet's centre and axis found in a scan of the train's side."""
     from armkit.io.clouds import UNITS, read_cloud
-    from armkit.io.sensor_transform import read_sensor_to_base
+    from armkit.calibration import camera_to_base
+    from armkit.io.camera import read_camera_mount
     from armkit.perception import detect_target
 
     if units is not None:
@@ -78,7 +81,8 @@ def detect(cloud: Annotated[Path, typer.Argument(help="Cloud file: .pcd, .ply, .
     _one_of("--nonfinite", nonfinite)
     _one_of("--choose", choose)
     folder = output_folder(out) if out is not None else None
-    T_base_sensor = read_sensor_to_base(sensor_to_base) if sensor_to_base is not None else None
+    T_base_sensor = (None if sensor_to_base is None else
+                     camera_to_base(read_camera_mount(sensor_to_base)))
     data = read_cloud(cloud, units, nonfinite=nonfinite)
     k = 1.0 / UNITS[data.units]
     for name, text, value in (("--radius", radius, radius_value), ("--eps", eps, eps_value)):
