@@ -270,11 +270,17 @@ def _run(task: Task, result: JobResult, drive_map, host: str, port: int, tell) -
         if not _timed(result, "trajectory", tell, lambda: _trajectory(result, checker)):
             return result
         tell("trajectory", f"{result.trajectory.duration:.2f} s")
-        if not _timed(result, "send", tell, lambda: _send(result, client)):
-            return result
-        tell("send", f"{result.sent['waypoints']} waypoints acknowledged")
-        if not _timed(result, "arrival", tell, lambda: _arrive(result, client, drive_map)):
-            return result
+        log = _MotionLog()
+        try:
+            if not _timed(result, "send", tell, lambda: _send(result, client, log)):
+                return result
+            tell("send", f"{result.sent['waypoints']} waypoints acknowledged")
+            if not _timed(result, "arrival", tell,
+                          lambda: _arrive(result, client, drive_map, log)):
+                return result
+        finally:
+            result.executed_t = np.array(log.t)
+            result.executed_q = np.array(log.q).reshape(-1, robot.n)
         tell("arrival", "arrived")
         _timed(result, "check", tell, lambda: _check(result, drive_map))
         tell("check", f"{result.position_error * 1e3:.3f} mm")
@@ -317,7 +323,8 @@ def _choose(result: JobResult, checker) -> bool:
         inside = np.ones(len(q_all), bool)
     if len(q_all) == 0:
         verdict = ik(robot, T, result.q_current, mask=task.mask)
-        return bool(result.fail("ik", f"no IK solution: {verdict.reason}") and False)
+        result.fail("ik", f"no IK solution: {verdict.reason}")
+        return False
     result.solutions, result.within_limits = q_all.reshape(-1, robot.n), inside
     result.clearance = checker.clearance(result.solutions)
     result.collision_free = checker.valid(result.solutions) & inside
@@ -423,48 +430,56 @@ def _certified(trajectory, checker) -> bool:
     return bool(checker.valid(q).all())
 
 
-def _send(result: JobResult, client) -> bool:
+@dataclass
+class _MotionLog:
+    """The drive's joints as it reports them while it moves: times (s) since the first waypoint
+    was due, and joint values (rad, m)."""
+
+    started: float = field(default_factory=time.perf_counter)
+    t: list = field(default_factory=list)
+    q: list = field(default_factory=list)
+
+    def read(self, client):
+        status = client.status()
+        self.t.append(time.perf_counter() - self.started)
+        self.q.append(status.q)
+        return status
+
+
+def _send(result: JobResult, client, log: _MotionLog) -> bool:
     """Each waypoint at its time, as the trajectory passes it; the drive's state read between."""
     t, q = result.t, result.q
-    times, seen = [], []
-    started = time.perf_counter()
     accepted = -1
     try:
         for k in range(len(q)):
-            while (now := time.perf_counter() - started) < t[k]:
-                times.append(now)
-                seen.append(client.status().q)
-                time.sleep(min(POLL_PERIOD, max(t[k] - now, 0.0)))
+            while (wait := t[k] - (time.perf_counter() - log.started)) > 0:
+                log.read(client)
+                time.sleep(min(POLL_PERIOD, wait))
             client.write_waypoint(q[k])
             accepted = k
     except DriveError as err:
         result.sent = {"waypoints": accepted + 1, "last_accepted": err.last_accepted
                        if err.last_accepted is not None else accepted}
-        result.executed_t, result.executed_q = np.array(times), np.array(seen).reshape(-1, q.shape[1])
         result.fail("send", f"drive fault: {err}")
         return False
     result.sent = {"waypoints": len(q), "last_accepted": len(q) - 1}
-    result.executed_t, result.executed_q = np.array(times), np.array(seen).reshape(-1, q.shape[1])
-    result.timings["started"] = started
     return True
 
 
-def _arrive(result: JobResult, client, drive_map) -> bool:
+def _arrive(result: JobResult, client, drive_map, log: _MotionLog) -> bool:
     """Wait (bounded) until the drive reports its joints at the last waypoint and still."""
+    from armkit.drives.simdrive import MOVING_BIT
+
     target = result.q[-1]
     tolerance = 2 * ARRIVAL_COUNTS * half_count(drive_map, target) + 1e-12
-    started = result.timings.pop("started")
     deadline = time.perf_counter() + result.task.arrival_timeout
-    times, seen = list(result.executed_t), list(result.executed_q)
     try:
         while True:
-            status = client.status()
-            times.append(time.perf_counter() - started)
-            seen.append(status.q)
+            status = log.read(client)
             if status.faulted:
                 result.fail("arrival", f"drive fault while moving (code {status.fault_code})")
                 return False
-            moving = status.state is not None and bool(status.state & 2)
+            moving = status.state is not None and bool(status.state >> MOVING_BIT & 1)
             if np.all(np.abs(status.q - target) <= tolerance) and not moving:
                 break
             if time.perf_counter() > deadline:
@@ -475,9 +490,6 @@ def _arrive(result: JobResult, client, drive_map) -> bool:
     except DriveError as err:
         result.fail("arrival", f"drive fault: {err}")
         return False
-    finally:
-        result.executed_t = np.array(times)
-        result.executed_q = np.array(seen).reshape(-1, result.q.shape[1])
     result.q_final = status.q
     return True
 

@@ -21,6 +21,7 @@ from typer.core import TyperGroup
 
 from armkit.cli.values import label
 from armkit.errors import ArmkitError, DriveError, InputError
+from armkit.io.documents import is_number
 
 EXIT_FAILED, EXIT_BAD_INPUT = 1, 2
 # What armkit does, as pyproject.toml's description says it.
@@ -47,14 +48,6 @@ def _option_takes(command, ctx) -> dict[str, int]:
     return takes
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _check_unknown_options(command, ctx, args: list[str]) -> None:
     """Refuse an unknown option where the command lets "-30" stand as a value, so that
     ``--bogus`` is an unknown option rather than a bad number."""
@@ -70,7 +63,7 @@ def _check_unknown_options(command, ctx, args: list[str]) -> None:
         if name in takes:
             i += 1 + (0 if "=" in arg else takes[name])
             continue
-        if arg.startswith("-") and len(arg) > 1 and not _is_number(arg) \
+        if arg.startswith("-") and len(arg) > 1 and not is_number(arg) \
                 and arg[:2] not in takes:
             raise InputError(_unknown_option(name, _command_name(ctx), list(takes)))
         i += 1

@@ -20,8 +20,8 @@ from pydantic import Field, ValidationError, field_validator
 
 from armkit.calibration.frames import CameraMount
 from armkit.errors import ModelFileError
-from armkit.io.documents import StrictModel, read_yaml, validation_error
-from armkit.io.handeye import PoseField, UnitsField, rigid_pose
+from armkit.io.documents import StrictModel, UnitsField, read_yaml, validation_error
+from armkit.io.handeye import PoseField, rigid_pose
 from armkit.model.robot import Units
 
 Row6 = Annotated[list[float], Field(min_length=6, max_length=6)]

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError, ModelFileError
+from armkit.io.documents import is_number
 
 UNITS = {"m": 1.0, "mm": 1e-3}
 SUFFIXES = (".pcd", ".ply", ".csv", ".xyz", ".txt", ".npy")
@@ -315,14 +316,6 @@ def _text_table(path: str, text: str, delimiter: str | None, first_line: int = 1
         raise ModelFileError(path, "", "a table of numbers", msg.splitlines()[0]) from None
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
 def _read_text(path: str, raw: bytes) -> tuple[NDArray, list[bytes]]:
     if b"\0" in raw[:4096]:
         raise ModelFileError(path, "", "a text file of x y z rows", "binary data")
@@ -348,7 +341,7 @@ def _read_text(path: str, raw: bytes) -> tuple[NDArray, list[bytes]]:
     cells = [c.strip().lower() for c in (first.split(delimiter) if delimiter else first.split())]
     columns = [0, 1, 2]
     skip = 0
-    if not all(_is_number(c) for c in cells):                # a header row
+    if not all(is_number(c) for c in cells):                # a header row
         if any(c not in cells for c in "xyz"):
             raise ModelFileError(path, f"line {first_i + 1}", "a header naming columns x, y "
                                  "and z", first.strip()[:60])

@@ -12,7 +12,7 @@ import math
 import re
 from collections.abc import Hashable
 from pathlib import Path
-from typing import Annotated, Any, get_args
+from typing import Annotated, Any, Literal, get_args
 
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, ValidationError
@@ -42,6 +42,22 @@ def _strict_number(value: Any) -> float:
 
 Number = Annotated[float, BeforeValidator(_strict_number)]
 """A file's number field: a finite int or float (``true`` or ``"1.5"`` is not a number)."""
+
+
+def is_number(text: str) -> bool:
+    """Whether Python reads `text` as a float ("1e-3", "nan" and "-inf" are numbers)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+class UnitsField(StrictModel):
+    """A file's declared units: ``units: {length: mm, angle: deg}``."""
+
+    length: Literal["mm", "m"]
+    angle: Literal["deg", "rad"]
 
 MAX_BYTES = 8 * 2**20
 """The largest file read_text and read_yaml read by default (bytes)."""

@@ -43,7 +43,7 @@ from pydantic import Field, ValidationError, model_validator
 
 from armkit.calibration.handeye import HandEyeResult
 from armkit.errors import InputError, ModelFileError
-from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_yaml, validation_error
 from armkit.kinematics.forward import fk
 from armkit.model.files import robot as load_named_robot
 from armkit.model.robot import Units
@@ -51,11 +51,6 @@ from armkit.spatial import invert, matrix_to_rpy, quat_to_matrix, rpy_to_matrix
 
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Row4 = Annotated[list[float], Field(min_length=4, max_length=4)]
-
-
-class UnitsField(StrictModel):
-    length: Literal["mm", "m"]
-    angle: Literal["deg", "rad"]
 
 
 class PoseField(StrictModel):

@@ -34,18 +34,13 @@ import numpy as np
 from pydantic import Field, ValidationError, model_validator
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, read_text, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_text, read_yaml, validation_error
 from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
 from armkit.spatial import pose_from_xyz_rpy, quat_to_matrix
 
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 Positive = Annotated[float, Field(gt=0)]
-
-
-class _UnitsField(StrictModel):
-    length: Literal["mm", "m"]
-    angle: Literal["deg", "rad"]
 
 
 class _BoxField(StrictModel):
@@ -115,7 +110,7 @@ class _PlannerField(StrictModel):
 
 
 class _SceneFile(StrictModel):
-    units: _UnitsField
+    units: UnitsField
     robot: str | None = None
     radius: Positive | None = None
     obstacles: list[Obstacle] = []

@@ -31,43 +31,20 @@ with "did you mean" for a misspelled key.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, ValidationError, field_validator
+from pydantic import Field, ValidationError
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_yaml, validation_error
 from armkit.io.scene import Obstacle
+from armkit.model.files import MAX_LENGTH
 from armkit.model.robot import Units
 from armkit.spatial import pose_from_xyz_rpy
 
-# Task values are lengths of a workcell and angles: anything beyond these is a typo or a unit
-# mistake (metres written as millimetres twice), not a task.
-LARGEST_LENGTH_M = 1e3
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-
-
-def _finite(v: list[float] | float | None):
-    values = v if isinstance(v, list) else [v]
-    for x in values:
-        if x is not None and not math.isfinite(x):
-            raise ValueError(f"expected finite numbers, found {x}")
-    return v
-
-
-class UnitsField(StrictModel):
-    length: Literal["mm", "m"]
-    angle: Literal["deg", "rad"]
-
-
-class PoseField(StrictModel):
-    xyz: Vector3
-    rpy: Vector3 = [0.0, 0.0, 0.0]
-
-    _check = field_validator("xyz", "rpy")(_finite)
 
 
 class CameraField(StrictModel):
@@ -79,8 +56,6 @@ class CameraField(StrictModel):
     file: str | None = None
     q: list[float] | None = None
 
-    _check = field_validator("xyz", "rpy", "q")(_finite)
-
 
 class TargetField(StrictModel):
     xyz: Vector3 | None = None
@@ -91,8 +66,6 @@ class TargetField(StrictModel):
     radius: float | None = Field(None, gt=0)          # the inlet's, length units; else fitted
     cloud_units: Literal["mm", "m"] | None = None     # when the cloud file declares none
     mask: str | None = None             # the IK task: position, position+yaw, pose, ...
-
-    _check = field_validator("xyz", "rpy", "yaw", "radius")(_finite)
 
 
 class SceneField(StrictModel):
@@ -135,8 +108,6 @@ class TaskFile(StrictModel):
     motion: MotionField = MotionField()
     drive: DriveField | None = None
     report: str | None = None
-
-    _check = field_validator("start")(_finite)
 
 
 def parse_task(document: Any, path: str | Path = "<task>"):
@@ -286,8 +257,8 @@ def _joint_si(values: list[float], robot, units: Units) -> np.ndarray:
 
 def _length(x, units: Units, where: str, field: str):
     v = units.length_to_si(x)
-    if np.any(np.abs(v) > LARGEST_LENGTH_M):
-        raise ModelFileError(where, field, f"lengths within {LARGEST_LENGTH_M:g} m",
+    if np.any(np.abs(v) > MAX_LENGTH):
+        raise ModelFileError(where, field, f"lengths within {MAX_LENGTH:g} m",
                              f"{np.max(np.abs(v)):g} m")
     return v
 

@@ -30,8 +30,8 @@ import yaml
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from armkit.errors import InputError, ModelFileError
-from armkit.io.documents import (Number, StrictModel, found_text, kind_of, read_yaml,
-                                 validation_error)
+from armkit.io.documents import (Number, StrictModel, UnitsField, found_text, kind_of,
+                                 read_yaml, validation_error)
 from armkit.model.chain import Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
@@ -62,11 +62,6 @@ MAX_AXIS = 1e3
 class PoseField(StrictModel):
     xyz: Vector3 = [0.0, 0.0, 0.0]
     rpy: Vector3 = [0.0, 0.0, 0.0]
-
-
-class UnitsField(StrictModel):
-    length: Literal["mm", "m"]
-    angle: Literal["deg", "rad"]
 
 
 class _JointField(StrictModel):

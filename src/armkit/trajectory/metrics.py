@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.trajectory.piecewise import DERIVATIVES, Samples, Trajectory, _falling, peak
+from armkit.trajectory.piecewise import DERIVATIVES, Samples, Trajectory, falling_factorial, peak
 
 @dataclass(frozen=True)
 class Stats:
@@ -72,7 +72,7 @@ def squared_jerk(tr: Trajectory) -> NDArray:
     if c.shape[1] < 4:
         return np.zeros(tr.n)
     k = np.arange(c.shape[1] - 3)
-    d = c[:, 3:] * np.array([_falling(i + 3, 3) for i in k])[None, :, None]     # (m, L, n)
+    d = c[:, 3:] * np.array([falling_factorial(i + 3, 3) for i in k])[None, :, None]     # (m, L, n)
     power = k[:, None] + k[None, :] + 1
     h = np.diff(tr.breaks)
     W = h[:, None, None] ** power / power                                        # (m, L, L)

@@ -233,7 +233,7 @@ def _derivative_table(c: NDArray, count: int) -> NDArray:
     return c[:, np.minimum(source, K - 1), :] * factor[None, :, :, None]
 
 
-def _falling(k: int, r: int) -> float:
+def falling_factorial(k: int, r: int) -> float:
     """k (k - 1) ... (k - r + 1): the factor d^r/dx^r brings to x^k."""
     out = 1.0
     for i in range(r):
@@ -246,7 +246,7 @@ def piece_values(c: NDArray, tau: NDArray, derivative: int = 0) -> NDArray:
     K = c.shape[1]
     out = np.zeros(tau.shape + (c.shape[2],))
     for k in range(K - 1, derivative - 1, -1):        # Horner, highest power first
-        out = out * tau[..., None] + (c[:, k] * _falling(k, derivative))[:, None, :]
+        out = out * tau[..., None] + (c[:, k] * falling_factorial(k, derivative))[:, None, :]
     return out
 
 
@@ -279,7 +279,7 @@ def _at(c: NDArray, tau: NDArray, derivative: int) -> NDArray:
     """Derivative of polynomials c (m, K, n) at one local time per piece and joint, (m, n)."""
     out = np.zeros(tau.shape)
     for k in range(c.shape[1] - 1, derivative - 1, -1):
-        out = out * tau + c[:, k] * _falling(k, derivative)
+        out = out * tau + c[:, k] * falling_factorial(k, derivative)
     return out
 
 

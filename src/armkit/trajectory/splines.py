@@ -50,7 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import LinAlgError, solve_banded
 
 from armkit.errors import InputError
-from armkit.trajectory.piecewise import Trajectory, _falling
+from armkit.trajectory.piecewise import Trajectory, falling_factorial
 
 PAPER_PATTERNS = ("3-3-3", "4-5-5", "5-5-5")
 Boundary = ArrayLike | str | None
@@ -209,7 +209,7 @@ class _System:
         self.off = np.r_[0, np.cumsum(deg + 1)]
         self.K = int(deg.max()) + 1
         top = max(self.K, continuity + 1)
-        self.fall = np.array([[_falling(k, r) for k in range(top)] for r in range(top)])
+        self.fall = np.array([[falling_factorial(k, r) for k in range(top)] for r in range(top)])
 
     def _ends(self, seg: NDArray, side: int, r: int, weight: NDArray):
         """One row per segment in seg: ``weight * h**r * d^r q/dt^r`` at u = side.
@@ -268,7 +268,7 @@ class _System:
         ``int_0^1 u^(k-3) u^(l-3) du = 1 / (k + l - 5)``.
         """
         k = np.arange(self.K)
-        f3 = np.array([_falling(j, 3) for j in k])
+        f3 = np.array([falling_factorial(j, 3) for j in k])
         use = (k[None, :, None] >= 3) & (k[None, None, :] >= 3) & \
             (k[None, :, None] <= self.deg[:, None, None]) & \
             (k[None, None, :] <= self.deg[:, None, None])
