@@ -29,8 +29,9 @@ JointKind = Literal["revolute", "prismatic"]
 KINDS: tuple[str, ...] = ("revolute", "prismatic")
 
 
-def _frozen(a: ArrayLike) -> NDArray:
-    a = np.array(a, dtype=float)
+def frozen_array(a: ArrayLike, dtype=float) -> NDArray:
+    """A read-only copy of `a` as an array of `dtype`: the arrays of armkit's immutable values."""
+    a = np.array(a, dtype=dtype)
     a.setflags(write=False)
     return a
 
@@ -40,7 +41,7 @@ def freeze(record, *names: str) -> None:
     for name in names:
         value = getattr(record, name)
         if value is not None:
-            object.__setattr__(record, name, _frozen(value))
+            object.__setattr__(record, name, frozen_array(value))
 
 
 @dataclass(frozen=True)
@@ -97,9 +98,9 @@ class Joint:
         norm = np.linalg.norm(axis) if axis.shape == (3,) else 0.0
         if not norm > 1e-9:
             raise InputError(f"joint {self.name}: expected a non-zero 3-vector axis, found {axis}")
-        object.__setattr__(self, "axis", _frozen(axis / norm))
-        object.__setattr__(self, "T_before", _frozen(self.T_before))
-        object.__setattr__(self, "T_after", _frozen(self.T_after))
+        object.__setattr__(self, "axis", frozen_array(axis / norm))
+        object.__setattr__(self, "T_before", frozen_array(self.T_before))
+        object.__setattr__(self, "T_after", frozen_array(self.T_after))
         object.__setattr__(self, "offset", float(self.offset))
 
 
@@ -179,12 +180,12 @@ class Chain:
             object.__setattr__(self, name, value)
 
         set_("joints", joints)
-        set_("T_base", _frozen(self.T_base))
-        set_("T_tool", _frozen(self.T_tool))
-        set_("lower", _frozen([j.limits.lower for j in joints]))
-        set_("upper", _frozen([j.limits.upper for j in joints]))
-        set_("velocity_limits", _frozen([j.limits.velocity for j in joints]))
-        set_("acceleration_limits", _frozen([j.limits.acceleration for j in joints]))
+        set_("T_base", frozen_array(self.T_base))
+        set_("T_tool", frozen_array(self.T_tool))
+        set_("lower", frozen_array([j.limits.lower for j in joints]))
+        set_("upper", frozen_array([j.limits.upper for j in joints]))
+        set_("velocity_limits", frozen_array([j.limits.velocity for j in joints]))
+        set_("acceleration_limits", frozen_array([j.limits.acceleration for j in joints]))
         revolute = np.array([j.kind == "revolute" for j in joints])
         revolute.setflags(write=False)
         set_("revolute", revolute)
@@ -196,9 +197,9 @@ class Chain:
         kinds = np.where(revolute, 0, 1).astype(np.int64)
         kinds.setflags(write=False)
         set_("kernel", KernelChain(
-            kinds=kinds, offsets=_frozen([j.offset for j in joints]),
-            pre=_frozen(self.T_base @ joints[0].T_before @ align[0]),
-            links=_frozen(links), after=_frozen(np.reshape(after[:-1], (-1, 4, 4)))))
+            kinds=kinds, offsets=frozen_array([j.offset for j in joints]),
+            pre=frozen_array(self.T_base @ joints[0].T_before @ align[0]),
+            links=frozen_array(links), after=frozen_array(np.reshape(after[:-1], (-1, 4, 4)))))
         # Screws at home: walk the kernel form at q = 0 (each joint at its offset).
         T, screws, points = self.kernel.pre, [], []
         for j, link in zip(joints, self.kernel.links):
@@ -207,9 +208,9 @@ class Chain:
             screws.append(np.r_[-np.cross(w, r), w] if j.kind == "revolute" else np.r_[w, 0, 0, 0])
             points.append(r)
             T = T @ link
-        set_("screws", _frozen(screws))
-        set_("points", _frozen(points))
-        set_("T_home", _frozen(T))
+        set_("screws", frozen_array(screws))
+        set_("points", frozen_array(points))
+        set_("T_home", frozen_array(T))
 
     @property
     def n(self) -> int:
@@ -233,7 +234,7 @@ class Chain:
         lower = np.where(np.isfinite(self.lower), self.lower,
                          np.where(self.revolute, -np.pi, -1.0))
         upper = np.where(endless, lower + np.where(self.revolute, 2 * np.pi, 2.0), self.upper)
-        return _frozen(lower), _frozen(upper)
+        return frozen_array(lower), frozen_array(upper)
 
 
 @dataclass(frozen=True, eq=False)

@@ -18,15 +18,10 @@ from numpy.typing import NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics.forward import fk_frames
+from armkit.model.chain import frozen_array
 from armkit.model.robot import Robot
 
 DEFAULT_RADIUS = 0.04       # m, the default capsules' radius when the robot file gives none
-
-
-def _frozen(a, dtype=float) -> NDArray:
-    a = np.array(a, dtype=dtype)
-    a.setflags(write=False)
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,10 +50,10 @@ class ArmGeometry:
     source: str = ""
 
     def __post_init__(self):
-        link = _frozen(self.link, np.int64).reshape(-1)
+        link = frozen_array(self.link, np.int64).reshape(-1)
         m = link.shape[0]
-        a, b = _frozen(self.a).reshape(m, 3), _frozen(self.b).reshape(m, 3)
-        radius = _frozen(self.radius).reshape(m)
+        a, b = frozen_array(self.a).reshape(m, 3), frozen_array(self.b).reshape(m, 3)
+        radius = frozen_array(self.radius).reshape(m)
         if not (np.isfinite(a).all() and np.isfinite(b).all() and np.all(radius > 0)):
             raise InputError("arm geometry: expected finite points and positive radii, "
                              "found otherwise")

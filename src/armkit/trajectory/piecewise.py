@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.model.chain import _frozen
+from armkit.model.chain import frozen_array
 from armkit.trajectory import _kernels
 
 DERIVATIVES = ("position", "velocity", "acceleration", "jerk")
@@ -73,7 +73,7 @@ class Trajectory:
     label: str = ""
 
     def __post_init__(self):
-        breaks, coefficients = _frozen(self.breaks), _frozen(self.coefficients)
+        breaks, coefficients = frozen_array(self.breaks), frozen_array(self.coefficients)
         if breaks.ndim != 1 or breaks.shape[0] < 2:
             raise InputError(f"breaks: expected shape (m + 1,) with m >= 1, found {breaks.shape}")
         if coefficients.ndim != 3 or coefficients.shape[0] != breaks.shape[0] - 1:
@@ -86,7 +86,7 @@ class Trajectory:
         if not ((np.diff(breaks) > 0).all() or resting):
             raise InputError("breaks: expected strictly increasing times, found "
                              f"{np.array2string(breaks, threshold=8)}")
-        knots = breaks[[0, -1]] if self.knots is None else _frozen(self.knots)
+        knots = breaks[[0, -1]] if self.knots is None else frozen_array(self.knots)
         object.__setattr__(self, "breaks", breaks)
         object.__setattr__(self, "coefficients", coefficients)
         object.__setattr__(self, "knots", knots)
