@@ -77,12 +77,12 @@ def link_to_body(robot: Robot) -> NDArray:
     """For each link 0..n, the transform (4, 4) taking points from the link frame to the frame
     the kernels move it with: identity for link 0 (the base frame), for link i joint i's frame
     after its motion (z on its axis)."""
-    k = robot.chain.kernel
-    out = np.empty((robot.n + 1, 4, 4))
+    k, n = robot.chain.kernel, robot.chain.n_joints
+    out = np.empty((n + 1, 4, 4))
     out[0] = np.eye(4)
-    for i in range(robot.n - 1):
+    for i in range(n - 1):
         out[i + 1] = k.after[i]
-    out[robot.n] = k.links[robot.n - 1]
+    out[n] = k.links[n - 1]
     return out
 
 
@@ -101,7 +101,7 @@ def default_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
     first = np.linalg.inv(T_base) @ k.pre[:, 3]
     if np.linalg.norm(first[:3]) > 1e-9:
         links.append(0), A.append(np.zeros(3)), B.append(first[:3])
-    for i in range(robot.n):
+    for i in range(robot.chain.n_joints):
         # Segment from joint i's origin to joint i+1's, rigid in joint i's moved frame.
         a_body, b_body = np.array([0.0, 0, 0, 1]), k.links[i][:, 3]
         links.append(i + 1)
