@@ -34,7 +34,6 @@ sample_hi)``, ``task = (mask, rows, tol_position, tol_rotation)`` and
 from __future__ import annotations
 
 import math
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -43,6 +42,7 @@ import numpy as np
 
 from armkit.kinematics._kernels import pose_jacobian_one
 from armkit.kinematics.ik.task import task_errors_one, task_residual
+from armkit.threads import threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
@@ -55,20 +55,13 @@ STALL_AFTER, STALL_WINDOW, STALL_FACTOR = 6, 3, 0.25
 TARGETS_PER_THREAD = 256    # below this many targets per thread, threads cost more than they save
 
 
-def available_threads() -> int:
-    """CPU cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                              # not on Linux
-        return os.cpu_count() or 1
-
-
 def thread_count(targets: int, threads: int | None = None) -> int:
-    """Threads for a batch of `targets`: at most `threads` (default: the cores this process
-    may use), and one per `TARGETS_PER_THREAD` targets, so a small batch runs on the calling
-    thread and pays no start-up."""
-    limit = available_threads() if threads is None else threads
-    return max(1, min(limit, targets // TARGETS_PER_THREAD))
+    """Threads for a batch of `targets`: one per `TARGETS_PER_THREAD` targets, at most
+    `threads` (default: `armkit.threads`' choice, the idle cores or the bound the user set),
+    so a small batch, or one on a busy machine, runs on the calling thread."""
+    if threads is None:
+        return threads_for(targets, TARGETS_PER_THREAD)
+    return max(1, min(threads, targets // TARGETS_PER_THREAD))
 
 
 # --- kernels ----------------------------------------------------------------------------------

@@ -228,8 +228,9 @@ class IKSolver:
     seed : int
         Seed of the bank's samples.
     threads : int, optional
-        Most threads a batch may use (default: the cores this process may run on); a batch
-        uses one thread per 256 targets at most, so small batches stay on the calling thread.
+        Most threads a batch may use (default: `armkit.threads`' choice, the idle cores or the
+        bound set by `armkit.set_num_threads`); a batch uses one thread per 256 targets at
+        most, so small batches stay on the calling thread.
 
     Attributes
     ----------
