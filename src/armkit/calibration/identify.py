@@ -24,9 +24,9 @@ det(J^T J) of the identifiable set (greedy D-optimal design).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
+import numba
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
@@ -39,7 +39,6 @@ from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_array, as_transform, invert, log_so3, translation
 
 PARTS = ("table", "base", "tool")
-_PLANES = ((1, 2), (2, 0), (0, 1))     # the columns a rotation about x, y or z mixes
 _AXES = {"rx": (0, True), "ry": (1, True), "rz": (2, True),
          "tx": (0, False), "ty": (1, False), "tz": (2, False)}
 
@@ -66,6 +65,10 @@ class ParametricModel:
         True for angles (rad), False for lengths (m).
     factors : tuple
         Constant (4, 4) arrays and elementary motions, in product order.
+    codes, signs, constants : ndarray, shapes (F, 3), (F,), (F, 4, 4)
+        The factors as the compiled kernel takes them: per factor its kind (0-2 rotation
+        about x, y, z; 3-5 translation along x, y, z; 6 constant), parameter and joint index
+        (-1 for none), the motion's sign, and the constant (identity for a motion).
     """
 
     robot: Robot
@@ -74,6 +77,9 @@ class ParametricModel:
     angular: NDArray
     factors: tuple
     inner: tuple[int, int]
+    codes: NDArray
+    signs: NDArray
+    constants: NDArray
 
 
 def _frame_aligning(axis: NDArray, point: NDArray) -> NDArray:
@@ -172,8 +178,17 @@ def parametric_model(robot: Robot, parts=PARTS) -> ParametricModel:
     if "tool" in parts:
         factors += frame_params("T_tool", True)
     nominal_a, angular_a = np.array(nominal, dtype=float), np.array(angular, dtype=bool)
+    kinds = ("rx", "ry", "rz", "tx", "ty", "tz")
+    codes = np.array([(6, -1, -1) if isinstance(f, np.ndarray)
+                      else (kinds.index(f.kind), f.param, f.joint) for f in factors],
+                     dtype=np.int64).reshape(-1, 3)
+    signs = np.array([1.0 if isinstance(f, np.ndarray) else f.sign for f in factors])
+    constants = np.array([f if isinstance(f, np.ndarray) else np.eye(4) for f in factors],
+                         dtype=float).reshape(-1, 4, 4)
+    for a in (nominal_a, angular_a, codes, signs, constants):
+        a.flags.writeable = False
     return ParametricModel(robot, tuple(names), nominal_a, angular_a, tuple(factors),
-                           (start, stop))
+                           (start, stop), codes, signs, constants)
 
 
 def _constant(kind: str, value: float) -> NDArray:
@@ -205,49 +220,88 @@ def evaluate(model: ParametricModel, params: NDArray, Q: NDArray,
         Rows 0-2: the tool position's derivative (m per parameter unit); rows 3-5: the tool
         rotation's, as an angular velocity in the base frame (rad per parameter unit).
     """
-    m = len(Q)
-    # The running product as its four columns, each (3, m): right-multiplying by an
-    # elementary motion updates two columns (or one), not the whole batch of 4x4 products.
-    T = np.zeros((4, 3, m))
-    T[0, 0], T[1, 1], T[2, 2] = 1.0, 1.0, 1.0
-    records = []
-    for f in model.factors:
-        if isinstance(f, np.ndarray):
-            T = np.einsum("jk,jim->kim", f, T)
+    Q = np.ascontiguousarray(Q, dtype=float)
+    T, J = _evaluate_kernel(model.codes, model.signs, model.constants,
+                            np.ascontiguousarray(params, dtype=float), Q, jacobian)
+    return T, (J if jacobian else None)
+
+
+@numba.njit(cache=True, nogil=True)
+def _evaluate_kernel(codes, signs, constants, params, Q, jacobian):
+    """`evaluate` compiled: per configuration, the product of the factors kept as its four
+    columns (right-multiplying by an elementary motion changes one or two of them), with the
+    axis and origin of every parametrised motion recorded for the Jacobian."""
+    m, F, P = Q.shape[0], codes.shape[0], params.shape[0]
+    T = np.zeros((m, 4, 4))
+    J = np.zeros((m if jacobian else 0, 6, P))
+    n_records = 0
+    for f in range(F):
+        n_records += codes[f, 1] >= 0
+    axis_at = np.empty((n_records, 3))
+    origin_at = np.empty((n_records, 3))
+    C = np.empty((4, 3))                     # the product's columns x, y, z, position
+    new = np.empty((4, 3))
+    for i in range(m):
+        C[:] = 0.0
+        C[0, 0] = C[1, 1] = C[2, 2] = 1.0
+        r = 0
+        for f in range(F):
+            kind, k, joint = codes[f, 0], codes[f, 1], codes[f, 2]
+            if kind == 6:
+                for c in range(4):
+                    for e in range(3):
+                        new[c, e] = (constants[f, 0, c] * C[0, e] + constants[f, 1, c] * C[1, e]
+                                     + constants[f, 2, c] * C[2, e])
+                    new[c] += constants[f, 3, c] * C[3]
+                C[:] = new
+                continue
+            v = 0.0
+            if joint >= 0:
+                v += Q[i, joint]
+            if k >= 0:
+                v += params[k]
+            v *= signs[f]
+            a = kind % 3
+            if kind < 3:
+                p, q = (a + 1) % 3, (a + 2) % 3          # the columns a rotation about a mixes
+                c_, s_ = np.cos(v), np.sin(v)
+                for e in range(3):
+                    cp, cq = C[p, e], C[q, e]
+                    C[p, e] = c_ * cp + s_ * cq
+                    C[q, e] = c_ * cq - s_ * cp
+            else:
+                for e in range(3):
+                    C[3, e] += v * C[a, e]
+            if jacobian and k >= 0:
+                axis_at[r] = C[a]
+                origin_at[r] = C[3]
+                r += 1
+        for c in range(4):
+            for e in range(3):
+                T[i, e, c] = C[c, e]
+        T[i, 3, 3] = 1.0
+        if not jacobian:
             continue
-        if f.joint >= 0:
-            v = Q[:, f.joint] + params[f.param] if f.param >= 0 else Q[:, f.joint]
-            c_s = (np.cos, np.sin)
-        else:                                # one amount for the whole batch: a scalar
-            v = float(params[f.param])
-            c_s = (math.cos, math.sin)
-        v = f.sign * v
-        axis, rotation = _AXES[f.kind]
-        if rotation:
-            i, j = _PLANES[axis]
-            c, s = c_s[0](v), c_s[1](v)
-            T[i], T[j] = c * T[i] + s * T[j], c * T[j] - s * T[i]
-        else:
-            T[3] = T[3] + v * T[axis]
-        if jacobian and f.param >= 0:
-            records.append((f, T[axis].copy(), T[3].copy()))
-    out = np.zeros((m, 4, 4))
-    out[:, :3, :] = np.transpose(T, (2, 1, 0))
-    out[:, 3, 3] = 1.0
-    if not jacobian:
-        return out, None
-    J = np.zeros((len(model.names), 6, m))
-    p = T[3]
-    for f, axis, origin in records:
-        if _AXES[f.kind][1]:
-            d = p - origin
-            J[f.param, :3] += f.sign * np.array([axis[1] * d[2] - axis[2] * d[1],
-                                                 axis[2] * d[0] - axis[0] * d[2],
-                                                 axis[0] * d[1] - axis[1] * d[0]])
-            J[f.param, 3:] += f.sign * axis
-        else:
-            J[f.param, :3] += f.sign * axis
-    return out, np.transpose(J, (2, 1, 0))
+        r = 0
+        for f in range(F):
+            k = codes[f, 1]
+            if k < 0 or codes[f, 0] == 6:
+                continue
+            w, o, sg = axis_at[r], origin_at[r], signs[f]
+            r += 1
+            if codes[f, 0] < 3:
+                d0, d1, d2 = C[3, 0] - o[0], C[3, 1] - o[1], C[3, 2] - o[2]
+                J[i, 0, k] += sg * (w[1] * d2 - w[2] * d1)
+                J[i, 1, k] += sg * (w[2] * d0 - w[0] * d2)
+                J[i, 2, k] += sg * (w[0] * d1 - w[1] * d0)
+                J[i, 3, k] += sg * w[0]
+                J[i, 4, k] += sg * w[1]
+                J[i, 5, k] += sg * w[2]
+            else:
+                J[i, 0, k] += sg * w[0]
+                J[i, 1, k] += sg * w[1]
+                J[i, 2, k] += sg * w[2]
+    return T, J
 
 
 # --- identifiability -----------------------------------------------------------------------------
