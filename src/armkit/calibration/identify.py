@@ -408,6 +408,10 @@ class CalibrationResult:
     condition_number, o1 : float
         Of the scaled identification Jacobian (identifiable columns).
     iterations : int
+    added : dict
+        Parameters held at nominal by the analysis at the nominal values but identified at the
+        fitted ones (the second pass), each with the significance of its effect there
+        (standard deviations of the residual noise).
     """
 
     success: bool
@@ -427,6 +431,7 @@ class CalibrationResult:
     condition_number: float
     o1: float
     iterations: int
+    added: dict
 
 
 def _measurements(robot: Robot, q: ArrayLike, measured: ArrayLike, name: str):
@@ -465,8 +470,15 @@ def _position_errors(T: NDArray, M: NDArray) -> NDArray:
 def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
               holdout: tuple[ArrayLike, ArrayLike] | None = None, parts=PARTS,
               rank_tol: float = 1e-7, rotation_weight: float = 0.1,
-              iterations: int = 50) -> CalibrationResult:
+              iterations: int = 50, significance: float = 2.0) -> CalibrationResult:
     """Identify the robot's table, base and tool from measurements at joint values.
+
+    The parameters identifiable at the nominal values are fitted first (Gauss-Newton). Some
+    held ones only look unidentifiable at nominal, whose special geometry (a tool point on the
+    last axis, exactly perpendicular or parallel axes) hides them; a second pass at the fitted
+    values adds each held parameter whose effect there, beyond the fitted ones', is both
+    numerically distinct (at least ``ADDED_TOL`` of its size) and significant against the
+    residual noise (``significance`` standard deviations), then fits again.
 
     Parameters
     ----------
@@ -483,6 +495,9 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
         Relative size of a QR pivot below which parameters are taken as unidentifiable.
     rotation_weight : float
         m per rad: weight of pose measurements' rotation residuals against their positions.
+    significance : float
+        How many standard deviations of the residual noise a held parameter's effect at the
+        fitted values must reach to be added; ``inf`` keeps the nominal analysis only.
 
     Returns
     -------
@@ -497,33 +512,27 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
     if holdout is not None:
         Qh, Mh = _measurements(robot, holdout[0], holdout[1], "holdout")
     model = parametric_model(robot, parts)
-    params = model.nominal.copy()
 
     def rows(params, jac=True):
         T, J = evaluate(model, params, Q, jac)
         r = _residual(T, M, rotation_weight).ravel()
         return T, r, (None if J is None else _rows(J, M, rotation_weight).reshape(len(r), -1))
 
-    T0, r, J = rows(params)
+    T, r, J = rows(model.nominal)
     found = identifiability(J, model.names, rank_tol)
     free = found.identifiable
-    before = _position_errors(T0, M)
-    cost, done = r @ r, 0
-    for done in range(1, iterations + 1):
-        step = _gauss_newton_step(J[:, free], r)
-        for _ in range(10):                  # halve a step that does not lower the cost
-            trial = params.copy()
-            trial[free] += step
-            T_trial, r_trial, J_trial = rows(trial)
-            if r_trial @ r_trial <= cost:
-                break
-            step /= 2
-        else:
-            break                            # converged to rounding: no step lowers the cost
-        improved = cost - r_trial @ r_trial
-        params, T, r, J, cost = trial, T_trial, r_trial, J_trial, r_trial @ r_trial
-        if improved <= 1e-12 * cost or np.abs(step).max() < 1e-14:
+    before = _position_errors(T, M)
+    params, T, r, J, done = _gauss_newton(rows, model.nominal.copy(), free, T, r, J,
+                                          iterations)
+    added: dict[str, float] = {}
+    for _ in range(3):                       # each pass at the values the last fit reached
+        new = _significant_held(J, r, free, significance)
+        if not new:
             break
+        added.update({model.names[k]: z for k, z in new.items()})
+        free = np.sort(np.concatenate([free, list(new)]))
+        params, T, r, J, more = _gauss_newton(rows, params, free, T, r, J, iterations)
+        done += more
     Jf = J[:, free]
     norms = np.linalg.norm(Jf, axis=0)
     gram = np.einsum("ij,ik->jk", Jf, Jf) / np.outer(norms, norms)          # of the scaled Jacobian
@@ -542,11 +551,86 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
         hold_before = hold_after = np.zeros(0)
     after = _position_errors(T, M)
     success = bool(np.all(np.isfinite(params)))
+    dependencies = {n: c for n, c in found.dependencies.items() if n not in added}
     return CalibrationResult(
         success, "ok" if success else "the solve diverged", identified, model.names,
         model.nominal, params, std, model.angular,
-        np.isin(np.arange(len(params)), free), found.dependencies, before, after,
-        hold_before, hold_after, condition, o1, done)
+        np.isin(np.arange(len(params)), free), dependencies, before, after,
+        hold_before, hold_after, condition, o1, done, added)
+
+
+# A held parameter is added at the fitted values only when its effect there, beyond the fitted
+# parameters', is at least this fraction of its own: below it, its whole effect on a
+# measurement is under 1e-4 of the parameter's error times its lever (0.1 um per mm of error
+# on a 1 m arm), and its estimate would swing by metres on noise (a length along one of two
+# nearly parallel axes is such a parameter).
+ADDED_TOL = 1e-4
+
+# The residual's standard deviation is taken as at least this (m): below it, measurements and
+# model agree to rounding and there is nothing left to explain.
+_SIGMA_FLOOR = 1e-12
+
+
+def _significant_held(J: NDArray, r: NDArray, free: NDArray,
+                      significance: float) -> dict[int, float]:
+    """Held parameters (columns of J not in `free`) to add at the fitted values, with their
+    significance: greedily, the one whose column beyond the span of the fitted ones explains
+    the most of the residual r, while that reaches `significance` standard deviations
+    (a score test of the parameter at its nominal value)."""
+    held = np.setdiff1d(np.arange(J.shape[1]), free)
+    if held.size == 0 or not np.isfinite(significance):
+        return {}
+    norms = np.linalg.norm(J, axis=0)
+    held = held[norms[held] > 1e-12 * norms.max()]
+    if held.size == 0:
+        return {}
+    basis, _ = np.linalg.qr(J[:, free] / norms[free])
+    C = J[:, held] / norms[held]
+    C = C - basis @ (basis.T @ C)            # each held column beyond the fitted ones
+    C = C - basis @ (basis.T @ C)            # (twice: the parts left are as small as 1e-4)
+    r = r - basis @ (basis.T @ r)
+    dof = len(r) - len(free)
+    chosen: dict[int, float] = {}
+    while dof > 1:
+        size = np.linalg.norm(C, axis=0)
+        live = size > ADDED_TOL
+        if not live.any():
+            break
+        sigma = max(np.sqrt(r @ r / dof), _SIGMA_FLOOR)
+        z = np.where(live, np.abs(C.T @ r) / np.where(live, size, 1.0) / sigma, 0.0)
+        best = int(np.argmax(z))
+        if z[best] < significance:
+            break
+        chosen[int(held[best])] = float(z[best])
+        u = C[:, best] / size[best]
+        r = r - u * (u @ r)
+        C = C - np.outer(u, u @ C)
+        C[:, best] = 0.0
+        dof -= 1
+    return chosen
+
+
+def _gauss_newton(rows, params: NDArray, free: NDArray, T: NDArray, r: NDArray, J: NDArray,
+                  iterations: int):
+    """Gauss-Newton on the parameters `free`, from `params` (its T, r, J given); a step that
+    does not lower the cost is halved. Returns params, T, r, J at the end and the iterations."""
+    cost, done = r @ r, 0
+    for done in range(1, iterations + 1):
+        step = _gauss_newton_step(J[:, free], r)
+        for _ in range(10):                  # halve a step that does not lower the cost
+            trial = params.copy()
+            trial[free] += step
+            T_trial, r_trial, J_trial = rows(trial)
+            if r_trial @ r_trial <= cost:
+                break
+            step /= 2
+        else:
+            break                            # converged to rounding: no step lowers the cost
+        improved = cost - r_trial @ r_trial
+        params, T, r, J, cost = trial, T_trial, r_trial, J_trial, r_trial @ r_trial
+        if improved <= 1e-12 * cost or np.abs(step).max() < 1e-14:
+            break
+    return params, T, r, J, done
 
 
 def _gauss_newton_step(J: NDArray, r: NDArray) -> NDArray:
