@@ -513,29 +513,33 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
         Qh, Mh = _measurements(robot, holdout[0], holdout[1], "holdout")
     model = parametric_model(robot, parts)
 
-    def rows(params, jac=True):
-        T, J = evaluate(model, params, Q, jac)
-        r = _residual(T, M, rotation_weight).ravel()
-        return T, r, (None if J is None else _rows(J, M, rotation_weight).reshape(len(r), -1))
+    weights = np.array([1.0, 1.0, 1.0] + [rotation_weight if M.ndim == 3 else 0.0] * 3)
 
-    T, r, J = rows(model.nominal)
-    found = identifiability(J, model.names, rank_tol)
+    def system(params):
+        """Poses, residual, and the normal equations J^T J, J^T r of all the parameters."""
+        T, J = evaluate(model, params, Q)
+        r = _residual(T, M, rotation_weight)
+        A = _rows(J, M, rotation_weight)                        # (m, rows per measurement, P)
+        return T, r.ravel(), _gram_kernel(J, weights), np.einsum("mip,mi->p", A, r), A
+
+    T, r, G, g, A = system(model.nominal)
+    found = identifiability(A.reshape(-1, A.shape[-1]), model.names, rank_tol)
     free = found.identifiable
     before = _position_errors(T, M)
-    params, T, r, J, done = _gauss_newton(rows, model.nominal.copy(), free, T, r, J,
-                                          iterations)
+    state, done = _gauss_newton(system, model.nominal.copy(), free, (T, r, G, g), iterations)
     added: dict[str, float] = {}
     for _ in range(3):                       # each pass at the values the last fit reached
-        new = _significant_held(J, r, free, significance)
+        params, T, r, G, g = state
+        new = _significant_held(G, g, r @ r, len(r), free, significance)
         if not new:
             break
         added.update({model.names[k]: z for k, z in new.items()})
         free = np.sort(np.concatenate([free, list(new)]))
-        params, T, r, J, more = _gauss_newton(rows, params, free, T, r, J, iterations)
+        state, more = _gauss_newton(system, params, free, (T, r, G, g), iterations)
         done += more
-    Jf = J[:, free]
-    norms = np.linalg.norm(Jf, axis=0)
-    gram = np.einsum("ij,ik->jk", Jf, Jf) / np.outer(norms, norms)          # of the scaled Jacobian
+    params, T, r, G, g = state
+    norms = np.sqrt(np.diag(G)[free])
+    gram = G[np.ix_(free, free)] / np.outer(norms, norms)    # of the scaled Jacobian
     s = np.sqrt(np.clip(np.linalg.eigvalsh(gram), 0, None))[::-1]
     dof = max(len(r) - len(free), 1)
     cov = (r @ r) / dof * np.linalg.pinv(gram) / np.outer(norms, norms)
@@ -570,79 +574,114 @@ ADDED_TOL = 1e-4
 # model agree to rounding and there is nothing left to explain.
 _SIGMA_FLOOR = 1e-12
 
+# Residuals (m) at which a fit has met the measurements to rounding.
+_ROUNDING = 1e-14
 
-def _significant_held(J: NDArray, r: NDArray, free: NDArray,
+
+def _significant_held(G: NDArray, g: NDArray, rr: float, rows: int, free: NDArray,
                       significance: float) -> dict[int, float]:
-    """Held parameters (columns of J not in `free`) to add at the fitted values, with their
-    significance: greedily, the one whose column beyond the span of the fitted ones explains
-    the most of the residual r, while that reaches `significance` standard deviations
-    (a score test of the parameter at its nominal value)."""
-    held = np.setdiff1d(np.arange(J.shape[1]), free)
-    if held.size == 0 or not np.isfinite(significance):
+    """Held parameters to add at the fitted values, with their significance.
+
+    From the normal equations G = J^T J, g = J^T r and rr = r^T r of all the parameters:
+    greedily, the held parameter whose column beyond the span of the fitted ones explains the
+    most of the residual, while that reaches `significance` standard deviations of the
+    residual noise (a score test of the parameter at its nominal value) and its column beyond
+    the fitted ones is at least ADDED_TOL of its length. The parts beyond come from the Schur
+    complement of the fitted block in G with unit columns; their rounding error is about
+    1e-16 times that block's condition number (the square of the one reported), far below
+    ADDED_TOL ** 2 for any set the first pass accepts."""
+    if not np.isfinite(significance):
         return {}
-    norms = np.linalg.norm(J, axis=0)
-    held = held[norms[held] > 1e-12 * norms.max()]
+    d = np.sqrt(np.clip(np.diag(G), 0, None))
+    held = np.setdiff1d(np.flatnonzero(d > 1e-12 * d.max()), free)
     if held.size == 0:
         return {}
-    basis, _ = np.linalg.qr(J[:, free] / norms[free])
-    C = J[:, held] / norms[held]
-    C = C - basis @ (basis.T @ C)            # each held column beyond the fitted ones
-    C = C - basis @ (basis.T @ C)            # (twice: the parts left are as small as 1e-4)
-    r = r - basis @ (basis.T @ r)
-    dof = len(r) - len(free)
+    Gs, gs = G / np.outer(d, d).clip(1e-300), g / d.clip(1e-300)
+    Gff = Gs[np.ix_(free, free)]
+    X = np.linalg.solve(Gff, np.column_stack([Gs[np.ix_(free, held)], gs[free]]))
+    S = Gs[np.ix_(held, held)] - Gs[np.ix_(free, held)].T @ X[:, :-1]  # Gram of the parts beyond
+    s = gs[held] - Gs[np.ix_(free, held)].T @ X[:, -1]                 # and their scores
+    rr = rr - gs[free] @ X[:, -1]
+    dof = rows - len(free)
     chosen: dict[int, float] = {}
     while dof > 1:
-        size = np.linalg.norm(C, axis=0)
-        live = size > ADDED_TOL
+        size2 = np.diag(S).copy()
+        live = size2 > ADDED_TOL ** 2
         if not live.any():
             break
-        sigma = max(np.sqrt(r @ r / dof), _SIGMA_FLOOR)
-        z = np.where(live, np.abs(C.T @ r) / np.where(live, size, 1.0) / sigma, 0.0)
+        sigma = max(np.sqrt(max(rr, 0.0) / dof), _SIGMA_FLOOR)
+        z = np.where(live, np.abs(s) / np.sqrt(np.where(live, size2, 1.0)) / sigma, 0.0)
         best = int(np.argmax(z))
         if z[best] < significance:
             break
         chosen[int(held[best])] = float(z[best])
-        u = C[:, best] / size[best]
-        r = r - u * (u @ r)
-        C = C - np.outer(u, u @ C)
-        C[:, best] = 0.0
+        column, score = S[:, best].copy(), s[best]
+        rr -= score ** 2 / size2[best]
+        s = s - column * score / size2[best]
+        S = S - np.outer(column, column) / size2[best]
+        S[best, :] = S[:, best] = 0.0
         dof -= 1
     return chosen
 
 
-def _gauss_newton(rows, params: NDArray, free: NDArray, T: NDArray, r: NDArray, J: NDArray,
-                  iterations: int):
-    """Gauss-Newton on the parameters `free`, from `params` (its T, r, J given); a step that
-    does not lower the cost is halved. Returns params, T, r, J at the end and the iterations."""
+def _gauss_newton(system, params: NDArray, free: NDArray, current: tuple, iterations: int):
+    """Gauss-Newton on the parameters `free` from `params`, whose (T, r, G, g) are `current`;
+    a step that does not lower the cost is halved. It stops when the next step would move
+    the parameters by less than 1 % of their standard deviations (its predicted decrease of
+    the cost, step^T G step, below 1e-4 of the residual variance), when the residuals are at
+    rounding or no step lowers the cost, or after `iterations`.
+    Returns (params, T, r, G, g) at the end and the iterations done."""
+    T, r, G, g = current
     cost, done = r @ r, 0
     for done in range(1, iterations + 1):
-        step = _gauss_newton_step(J[:, free], r)
+        if cost <= len(r) * _ROUNDING ** 2:
+            break                            # the model meets the measurements to rounding
+        step = _gauss_newton_step(G[np.ix_(free, free)], g[free])
+        if step @ g[free] <= 1e-4 * cost / max(len(r) - len(free), 1):
+            break
         for _ in range(10):                  # halve a step that does not lower the cost
             trial = params.copy()
             trial[free] += step
-            T_trial, r_trial, J_trial = rows(trial)
-            if r_trial @ r_trial <= cost:
+            new = system(trial)
+            if new[1] @ new[1] <= cost:
                 break
             step /= 2
         else:
             break                            # converged to rounding: no step lowers the cost
-        improved = cost - r_trial @ r_trial
-        params, T, r, J, cost = trial, T_trial, r_trial, J_trial, r_trial @ r_trial
-        if improved <= 1e-12 * cost or np.abs(step).max() < 1e-14:
+        params, (T, r, G, g, _) = trial, new
+        cost = r @ r
+        if np.abs(step).max() < 1e-14:
             break
-    return params, T, r, J, done
+    return (params, T, r, G, g), done
 
 
-def _gauss_newton_step(J: NDArray, r: NDArray) -> NDArray:
-    """The least-squares step J^+ r through the normal equations of J with unit columns:
-    the identifiable set is well conditioned (its scaled condition number is reported), and a
-    P x P solve costs far less than a QR of thousands of rows."""
-    norms = np.linalg.norm(J, axis=0)
+@numba.njit(cache=True, nogil=True)
+def _gram_kernel(J, weights):
+    """sum over measurements and rows k of (weights[k] J[i, k])^T (weights[k] J[i, k]): the
+    normal matrix (P, P) of J (m, 6, P) on one thread (a BLAS product of this tall, thin
+    matrix waits for its threads on a busy machine)."""
+    m, rows, P = J.shape
+    G = np.zeros((P, P))
+    for i in range(m):
+        for k in range(rows):
+            w2 = weights[k] * weights[k]
+            if w2 == 0.0:
+                continue
+            for a in range(P):
+                x = J[i, k, a] * w2
+                if x != 0.0:
+                    for b in range(P):
+                        G[a, b] += x * J[i, k, b]
+    return G
+
+
+def _gauss_newton_step(G: NDArray, g: NDArray) -> NDArray:
+    """The least-squares step J^+ r from the normal equations G = J^T J, g = J^T r, solved
+    with unit columns: the identifiable set is well conditioned (its scaled condition number
+    is reported), and a P x P solve costs far less than a QR of thousands of rows."""
+    norms = np.sqrt(np.diag(G))
     norms = np.where(norms > 0, norms, 1.0)
-    Js = J / norms
-    # einsum, not @: a BLAS call on a tall, thin matrix spends more in its threads than in
-    # the arithmetic, worst on a busy machine.
-    return np.linalg.solve(np.einsum("ij,ik->jk", Js, Js), np.einsum("ij,i->j", Js, r)) / norms
+    return np.linalg.solve(G / np.outer(norms, norms), g / norms) / norms
 
 
 def identified_robot(model: ParametricModel, params: NDArray) -> Robot:
