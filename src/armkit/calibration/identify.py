@@ -229,31 +229,32 @@ def evaluate(model: ParametricModel, params: NDArray, Q: NDArray,
 @numba.njit(cache=True, nogil=True)
 def _evaluate_kernel(codes, signs, constants, params, Q, jacobian):
     """`evaluate` compiled: per configuration, the product of the factors kept as its four
-    columns (right-multiplying by an elementary motion changes one or two of them), with the
-    axis and origin of every parametrised motion recorded for the Jacobian."""
+    columns C[0..3] (x, y, z, position; right-multiplying by an elementary motion changes one
+    or two of them), with the axis and origin of every parametrised motion recorded for the
+    Jacobian. Scalar loops only: array expressions would multiply the compile time."""
     m, F, P = Q.shape[0], codes.shape[0], params.shape[0]
     T = np.zeros((m, 4, 4))
     J = np.zeros((m if jacobian else 0, 6, P))
-    n_records = 0
-    for f in range(F):
-        n_records += codes[f, 1] >= 0
-    axis_at = np.empty((n_records, 3))
-    origin_at = np.empty((n_records, 3))
-    C = np.empty((4, 3))                     # the product's columns x, y, z, position
-    new = np.empty((4, 3))
+    records = np.zeros((F, 6))               # per factor: axis, origin after it
+    C = np.zeros((4, 3))
+    new = np.zeros((4, 3))
     for i in range(m):
-        C[:] = 0.0
-        C[0, 0] = C[1, 1] = C[2, 2] = 1.0
-        r = 0
+        for c in range(4):
+            for e in range(3):
+                C[c, e] = 1.0 if c == e else 0.0
         for f in range(F):
             kind, k, joint = codes[f, 0], codes[f, 1], codes[f, 2]
             if kind == 6:
                 for c in range(4):
                     for e in range(3):
-                        new[c, e] = (constants[f, 0, c] * C[0, e] + constants[f, 1, c] * C[1, e]
-                                     + constants[f, 2, c] * C[2, e])
-                    new[c] += constants[f, 3, c] * C[3]
-                C[:] = new
+                        v = constants[f, 0, c] * C[0, e] + constants[f, 1, c] * C[1, e] \
+                            + constants[f, 2, c] * C[2, e]
+                        if c == 3:
+                            v += C[3, e]
+                        new[c, e] = v
+                for c in range(4):
+                    for e in range(3):
+                        C[c, e] = new[c, e]
                 continue
             v = 0.0
             if joint >= 0:
@@ -263,44 +264,48 @@ def _evaluate_kernel(codes, signs, constants, params, Q, jacobian):
             v *= signs[f]
             a = kind % 3
             if kind < 3:
-                p, q = (a + 1) % 3, (a + 2) % 3          # the columns a rotation about a mixes
-                c_, s_ = np.cos(v), np.sin(v)
+                p = (a + 1) % 3                  # the columns a rotation about a mixes
+                q = (a + 2) % 3
+                cv = np.cos(v)
+                sv = np.sin(v)
                 for e in range(3):
-                    cp, cq = C[p, e], C[q, e]
-                    C[p, e] = c_ * cp + s_ * cq
-                    C[q, e] = c_ * cq - s_ * cp
+                    cp = C[p, e]
+                    cq = C[q, e]
+                    C[p, e] = cv * cp + sv * cq
+                    C[q, e] = cv * cq - sv * cp
             else:
                 for e in range(3):
                     C[3, e] += v * C[a, e]
             if jacobian and k >= 0:
-                axis_at[r] = C[a]
-                origin_at[r] = C[3]
-                r += 1
+                for e in range(3):
+                    records[f, e] = C[a, e]
+                    records[f, 3 + e] = C[3, e]
         for c in range(4):
             for e in range(3):
                 T[i, e, c] = C[c, e]
         T[i, 3, 3] = 1.0
         if not jacobian:
             continue
-        r = 0
         for f in range(F):
             k = codes[f, 1]
             if k < 0 or codes[f, 0] == 6:
                 continue
-            w, o, sg = axis_at[r], origin_at[r], signs[f]
-            r += 1
+            sg = signs[f]
+            w0, w1, w2 = records[f, 0], records[f, 1], records[f, 2]
             if codes[f, 0] < 3:
-                d0, d1, d2 = C[3, 0] - o[0], C[3, 1] - o[1], C[3, 2] - o[2]
-                J[i, 0, k] += sg * (w[1] * d2 - w[2] * d1)
-                J[i, 1, k] += sg * (w[2] * d0 - w[0] * d2)
-                J[i, 2, k] += sg * (w[0] * d1 - w[1] * d0)
-                J[i, 3, k] += sg * w[0]
-                J[i, 4, k] += sg * w[1]
-                J[i, 5, k] += sg * w[2]
+                d0 = C[3, 0] - records[f, 3]
+                d1 = C[3, 1] - records[f, 4]
+                d2 = C[3, 2] - records[f, 5]
+                J[i, 0, k] += sg * (w1 * d2 - w2 * d1)
+                J[i, 1, k] += sg * (w2 * d0 - w0 * d2)
+                J[i, 2, k] += sg * (w0 * d1 - w1 * d0)
+                J[i, 3, k] += sg * w0
+                J[i, 4, k] += sg * w1
+                J[i, 5, k] += sg * w2
             else:
-                J[i, 0, k] += sg * w[0]
-                J[i, 1, k] += sg * w[1]
-                J[i, 2, k] += sg * w[2]
+                J[i, 0, k] += sg * w0
+                J[i, 1, k] += sg * w1
+                J[i, 2, k] += sg * w2
     return T, J
 
 
