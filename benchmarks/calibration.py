@@ -396,10 +396,13 @@ def pybotics(robot, q, measured, hold, hold_p, result):
         return
     doc = json.loads(run.stdout)
     error = np.linalg.norm(np.array(doc["holdout_positions"]) - hold_p, axis=-1).mean()
+    nominal = np.linalg.norm(np.array(doc["nominal_holdout_positions"]) - hold_p, axis=-1).mean()
     print(f"\npybotics (same data, UR10-like, 700 measurements, every parameter moved; its "
           f"OptimizationHandler with the whole chain, the tool position and the world frame "
-          f"free, scipy least_squares on its residuals, at most 30 evaluations): hold-out mean {error * 1e3:.4f} mm "
-          f"(armkit {result.holdout_after.mean() * 1e3:.4f}), one solve {doc['seconds']:.2f} s "
+          f"free, scipy least_squares on its residuals, at most 30 evaluations): hold-out mean "
+          f"{nominal * 1e3:.3f} -> {error * 1e3:.4f} mm (armkit "
+          f"{result.holdout_before.mean() * 1e3:.3f} -> {result.holdout_after.mean() * 1e3:.4f}), "
+          f"one solve {doc['seconds']:.2f} s "
           f"({doc['evaluations']} evaluations, status {doc['status']}); largest parameter "
           f"change {doc['largest_length_change_m'] * 1e3:.1f} mm, "
           f"{np.rad2deg(doc['largest_angle_change_rad']):.2f} deg")

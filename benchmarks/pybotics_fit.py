@@ -11,9 +11,10 @@ a, theta, d in m and rad; ``world`` and ``tool`` (4, 4)), the measurements ``q``
 its OptimizationHandler with every kinematic-chain parameter, the tool's position and the
 world frame free, and scipy's least_squares on pybotics' residual (the distance per
 measurement), as pybotics' calibration example does (it frees the joint offsets only; here
-every parameter is off nominal), stopped after MAX_EVALUATIONS evaluations. One JSON document on stdout: the solve's time (s), the
-hold-out positions predicted by the fitted arm (m), how far the parameters moved, and
-least_squares' status and evaluations.
+every parameter is off nominal), stopped after MAX_EVALUATIONS evaluations. One JSON document
+on stdout: the solve's time (s), the hold-out positions predicted by the fitted arm (m), how
+far the parameters moved, least_squares' status and evaluations, and the hold-out positions of
+the nominal arm (to show that pybotics models the same arm as armkit).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ def main() -> None:
                                   tool_mask=[True, True, True, False, False, False],
                                   world_mask=True)
     x0 = handler.generate_optimization_vector()
+    nominal = np.array([handler.robot.fk(q)[:3, 3] for q in data["hold_q"]])
     start = time.perf_counter()
     # Capped: with the redundant parameters free (the world frame against the first link, the
     # tool against the last) trf does not meet its tolerances and runs on for many minutes.
@@ -51,6 +53,7 @@ def main() -> None:
     predicted = np.array([handler.robot.fk(q)[:3, 3] for q in data["hold_q"]])
     chain = np.array(handler.robot.kinematic_chain.matrix) - np.array(data["mdh"])
     json.dump({"seconds": seconds, "holdout_positions": predicted.tolist(),
+               "nominal_holdout_positions": nominal.tolist(),
                "largest_length_change_m": float(np.abs(chain[:, [1, 3]]).max()),
                "largest_angle_change_rad": float(np.abs(chain[:, [0, 2]]).max()),
                "status": int(fit.status), "evaluations": int(fit.nfev)}, sys.stdout)
