@@ -16,10 +16,14 @@ per radian and turns the tool by w; a translation along w moves it by w.
 Identifiability: QR with column pivoting of the Jacobian with unit columns (Hollerbach and
 Wampler, 1996). Parameters past the numerical rank are held at nominal, and each is named with
 the identifiable combination that has the same effect. Only the identifiable set is fitted
-(Gauss-Newton); its standard deviations come from the residuals, and its observability from the
-scaled Jacobian's singular values: the condition number and O1 = (s_1 ... s_L)^(1/L) / sqrt(m)
-(Borm and Menq, 1991). `select_poses` picks, from a pool, the configurations that maximise
-det(J^T J) of the identifiable set (greedy D-optimal design).
+(Gauss-Newton on the normal equations). Nominal values can hide parameters that the true arm
+shows (a tool point on the last axis makes two of the wrist's parameters act as others do), so
+a second pass at the fitted values adds each held parameter whose effect there is distinct and
+significant against the residual noise (a score test), and fits again. The standard deviations
+come from the residuals, and the observability from the scaled Jacobian's singular values: the
+condition number and O1 = (s_1 ... s_L)^(1/L) / sqrt(m) (Borm and Menq, 1991).
+`select_poses` picks, from a pool, the configurations that maximise det(J^T J) of the
+identifiable set (greedy D-optimal design).
 """
 
 from __future__ import annotations
