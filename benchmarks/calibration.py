@@ -16,24 +16,36 @@ Degenerate sets (20 seeds each): rotations about one axis, within 0.006 deg of o
 translations, a repeated pose, and the robot poses inverted (base-to-gripper given as
 gripper-to-base). A "silent answer" is a success without a reason.
 
-Kinematic calibration: a true arm is the nominal table with every parameter moved (lengths by
-~N(0, 2 mm), angles by ~N(0, 0.1 deg), base and tool too; for the last row only the parameters
-identifiable at nominal, so that the model can match the true arm exactly); tool positions are
-measured with 0.05 mm of noise per axis; the hold-out set is 300 other configurations, measured
-without noise. water_supply at 10 measurements is also run over 40 true arms, random against
-D-optimal choices.
+Kinematic calibration: a true arm is the nominal table with every parameter moved by
+realistic amounts (the table's lengths ~N(0, 0.5 mm), its twists and joint offsets ~N(0, 0.2
+deg), the base's and tool's translations ~N(0, 1 mm) and rotations ~N(0, 0.5 deg); in one row
+only the parameters identifiable at nominal); tool positions are measured with 0.05 mm of
+noise per axis; the hold-out set is 300 other configurations, measured without noise.
 water_supply with 10 and 30 random measurements, and 10 chosen by select_poses from a pool of
-500; a UR10-like 6R arm (standard DH) with 700 measurements. The reference fits the same
-identifiable parameters with scipy.optimize.least_squares (trf, 2-point finite differences:
-the generic way, as pybotics and ikpy-style code do). pybotics itself pins numpy < 2 and is not
-installed beside armkit: not run.
+500 (also over 40 true arms, random against D-optimal choices); a UR10-like 6R arm (standard
+DH) with 700 measurements, also over 20 true arms beside what the noise alone allows (the
+hold-out error of a correctly specified linear least-squares fit of the same noise). The
+reference fits the same parameters as armkit with scipy.optimize.least_squares (trf, 2-point
+finite differences: the generic way).
+
+pybotics pins numpy < 2, so it runs in an interpreter of its own: with
+ARMKIT_PYBOTICS_PYTHON=/path/to/python (of an environment where pybotics is installed),
+benchmarks/pybotics_fit.py fits the UR10-like data set there, in a subprocess, and its
+hold-out error and time are printed beside armkit's:
+
+    python3.11 -m venv /work/venv-pybotics && /work/venv-pybotics/bin/pip install pybotics
+    ARMKIT_PYBOTICS_PYTHON=/work/venv-pybotics/bin/python python benchmarks/calibration.py
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
+import subprocess
+import tempfile
 import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -215,8 +227,14 @@ def ur10_like() -> Robot:
     return Robot("ur10_like", chain_from_dh(table), table=table)
 
 
+SIGMA = 0.05e-3                 # m, measurement noise per axis
+
+
 def true_arm(robot, rng, every=True):
-    """The nominal arm with every parameter moved, or only those identifiable at nominal."""
+    """The nominal arm with every parameter moved by realistic amounts: the table's lengths by
+    N(0, 0.5 mm), its angles (twists and joint offsets) by N(0, 0.2 deg), the base's and the
+    tool's translations by N(0, 1 mm) and rotations by N(0, 0.5 deg). With every=False only
+    the parameters identifiable at nominal (from 200 random configurations) are moved."""
     model = parametric_model(robot)
     moved = np.ones(len(model.names), dtype=bool)
     if not every:
@@ -225,16 +243,16 @@ def true_arm(robot, rng, every=True):
         found = identifiability(J[:, :3].reshape(-1, len(model.names)), model.names)
         moved[:] = False
         moved[found.identifiable] = True
-    delta = np.where(model.angular, rng.normal(size=len(moved)) * np.deg2rad(0.1),
-                     rng.normal(size=len(moved)) * 0.002)
+    frame = np.array([n.startswith(("T_base.", "T_tool.")) for n in model.names])
+    size = np.where(model.angular, np.deg2rad(np.where(frame, 0.5, 0.2)),
+                    np.where(frame, 1e-3, 0.5e-3))
+    delta = rng.normal(size=len(moved)) * size
     return identified_robot(model, model.nominal + np.where(moved, delta, 0.0))
 
 
-def scipy_reference(robot, q, measured):
-    """The same identifiable parameters fitted by least_squares with finite differences."""
+def scipy_reference(robot, q, measured, free):
+    """The same parameters `free` fitted by least_squares with finite differences."""
     model = parametric_model(robot)
-    _, J = evaluate(model, model.nominal, q)
-    free = identifiability(J[:, :3].reshape(-1, len(model.names)), model.names).identifiable
 
     def residual(x):
         params = model.nominal.copy()
@@ -248,43 +266,146 @@ def scipy_reference(robot, q, measured):
     return model, params
 
 
+def solve_times(f, rounds):
+    """Wall time (min, median, max) and the median CPU time of the process (s) over rounds."""
+    wall, cpu = [], []
+    for _ in range(rounds):
+        w, c = time.perf_counter(), time.process_time()
+        f()
+        cpu.append(time.process_time() - c)
+        wall.append(time.perf_counter() - w)
+    return (min(wall), float(np.median(wall)), max(wall)), float(np.median(cpu))
+
+
 def kinematic(quick):
-    print("\n## Kinematic calibration: hold-out mean position error (mm) before -> after, "
-          "time per solve (min / median / max)")
-    print("| arm, measurements | armkit: hold-out mm | armkit: time | scipy least_squares "
-          "(FD): hold-out mm | scipy: time | time ratio scipy / armkit | cond, O1 |")
-    print("|---|---|---|---|---|---|---|")
+    print("\n## Kinematic calibration: hold-out mean position error (mm) before -> after; "
+          "time per solve, wall min / median / max (CPU median)")
+    print("| arm, measurements | armkit: hold-out mm | armkit: time | added at the fitted "
+          "values | scipy least_squares (FD): hold-out mm | scipy: time | time ratio scipy / "
+          "armkit | cond, O1 |")
+    print("|---|---|---|---|---|---|---|---|")
     water, ur10 = armkit.robot("water_supply"), ur10_like()
     cases = [("water_supply", water, 10, False, True), ("water_supply", water, 30, False, True),
              ("water_supply", water, 10, True, True), ("UR10-like 6R", ur10, 700, False, True),
              ("UR10-like 6R", ur10, 700, False, False)]
-    spread = {}
+    spread, ur10_data = {}, None
     for label, robot, n, chosen, every in cases:
         rng = np.random.default_rng(n)
         q, measured, hold, hold_p, result = _trial(robot, n, chosen, every, rng)
-        t = timings(lambda r=robot, q=q, m=measured: calibrate(r, q, m), rounds=5, repeat=1)
-        model, params = scipy_reference(robot, q, measured)
+        t, cpu = solve_times(lambda r=robot, q=q, m=measured: calibrate(r, q, m),
+                             rounds=10 if n > 100 else 5)
+        free = np.flatnonzero(result.identifiable)
+        model, params = scipy_reference(robot, q, measured, free)
         ref_hold = np.linalg.norm(evaluate(model, params, hold, False)[0][:, :3, 3] - hold_p,
                                   axis=-1)
-        tr = timings(lambda r=robot, q=q, m=measured: scipy_reference(r, q, m),
-                     rounds=3 if quick else 5, repeat=1)
+        tr, _ = solve_times(lambda r=robot, q=q, m=measured: scipy_reference(r, q, m, free),
+                            rounds=3 if quick else 5)
         name = (f"{label}, {n}" + (" chosen (D-optimal from 500)" if chosen else " random")
-                + ("" if every else ", only identifiable parameters off nominal"))
+                + ("" if every else ", only parameters identifiable at nominal moved"))
         print(f"| {name} | {result.holdout_before.mean() * 1e3:.3f} -> "
-              f"{result.holdout_after.mean() * 1e3:.4f} | {fmt_t(t)} | "
-              f"{ref_hold.mean() * 1e3:.4f} | {fmt_t(tr)} | {tr[1] / t[1]:.1f} | "
+              f"{result.holdout_after.mean() * 1e3:.4f} | {fmt_t(t)} ({cpu * 1e3:.1f} ms) | "
+              f"{', '.join(result.added) or 'none'} | {ref_hold.mean() * 1e3:.4f} | "
+              f"{fmt_t(tr)} | {tr[1] / t[1]:.1f} | "
               f"{result.condition_number:.3g}, {result.o1:.3g} |")
         if robot is water and n == 10:
             seeds = 10 if quick else 40
             spread[chosen] = [_trial(robot, n, chosen, every, np.random.default_rng([n, s]))[4]
                               .holdout_after.mean() * 1e3 for s in range(seeds)]
+        if robot is ur10 and every:
+            ur10_data = (q, measured, hold, hold_p, result)
     print(f"\nwater_supply, 10 measurements, {len(spread[True])} true arms and noise draws: "
           f"hold-out mean error after calibration, median (p90): random "
           f"{np.median(spread[False]):.4f} ({np.percentile(spread[False], 90):.4f}) mm, "
           f"D-optimal from a pool of 500 {np.median(spread[True]):.4f} "
           f"({np.percentile(spread[True], 90):.4f}) mm "
           f"({1 - np.median(spread[True]) / np.median(spread[False]):.0%} lower)")
-    print("\npybotics: not run (it pins numpy < 2; armkit needs numpy 2).")
+    ur10_spread(ur10, 5 if quick else 20)
+    pybotics(ur10, *ur10_data)
+
+
+def ur10_spread(robot, arms):
+    """Hold-out error over many true arms against what the noise alone allows."""
+    model = parametric_model(robot)
+    ours, nominal_only, floor, formula, added = [], [], [], [], 0
+    for seed in range(arms):
+        rng = np.random.default_rng([700, seed])
+        actual = true_arm(robot, rng, True)
+        hold = rng.uniform(robot.lower, robot.upper, (300, robot.n))
+        hold_p = armkit.fk(actual, hold)[:, :3, 3]
+        q = rng.uniform(robot.lower, robot.upper, (700, robot.n))
+        exact = armkit.fk(actual, q)[:, :3, 3]
+        noise = rng.normal(0, SIGMA, exact.shape)
+        result = calibrate(robot, q, exact + noise, holdout=(hold, hold_p))
+        ours.append(result.holdout_after.mean())
+        added += len(result.added)
+        nominal_only.append(calibrate(robot, q, exact + noise, holdout=(hold, hold_p),
+                                      significance=np.inf).holdout_after.mean())
+        # What the noise alone allows: the hold-out error of a correctly specified linear
+        # least-squares fit (the parameters identifiable at the true arm, from noise-free
+        # data) of this very noise draw.
+        truth = calibrate(robot, q, exact)
+        free = truth.identifiable
+        _, J = evaluate(model, truth.identified, q)
+        _, Jh = evaluate(model, truth.identified, hold)
+        step = np.linalg.lstsq(J[:, :3, free].reshape(-1, free.sum()), noise.ravel(),
+                               rcond=None)[0]
+        floor.append(np.linalg.norm(Jh[:, :3, free] @ step, axis=-1).mean())
+        # mean of a 3-D error of per-axis sigma sqrt(p / 3m): 2 sqrt(2 / pi) of that
+        formula.append(2 * np.sqrt(2 / np.pi) * SIGMA * np.sqrt(free.sum() / (3 * len(q))))
+    ours, nominal_only, floor = (np.array(v) * 1e3 for v in (ours, nominal_only, floor))
+    print(f"\nUR10-like 6R, 700 measurements, {arms} true arms (every parameter moved) and "
+          f"noise draws: hold-out mean error (mm), median / p90 / max; arms <= 0.01 mm")
+    print("| fit | median | p90 | max | <= 0.01 mm |")
+    print("|---|---|---|---|---|")
+    for label, v in (("armkit (second pass at the fitted values)", ours),
+                     ("armkit, nominal identifiability only (significance=inf)", nominal_only),
+                     ("noise alone: correctly specified linear fit of the same noise", floor)):
+        print(f"| {label} | {np.median(v):.4f} | {np.percentile(v, 90):.4f} | {v.max():.4f} | "
+              f"{(v <= 0.01).sum()}/{arms} |")
+    print(f"\nsigma * 2 sqrt(2/pi) * sqrt(p / 3m) with p identifiable at the true arm: "
+          f"{np.median(formula) * 1e3:.4f} mm; parameters added per arm: {added / arms:.1f}; "
+          f"armkit / noise alone, median of the ratios: {np.median(ours / floor):.3f}")
+
+
+def pybotics(robot, q, measured, hold, hold_p, result):
+    """pybotics' fit of the same data in its own interpreter, if ARMKIT_PYBOTICS_PYTHON names
+    one (pybotics pins numpy < 2)."""
+    python = os.environ.get("ARMKIT_PYBOTICS_PYTHON")
+    if not python:
+        print("\npybotics: not run (set ARMKIT_PYBOTICS_PYTHON to the python of an "
+              "environment with pybotics installed; it pins numpy < 2).")
+        return
+    # The standard DH table as pybotics' modified DH: row k takes alpha and a of row k - 1,
+    # the last row's a and alpha go to the tool (Tx(a) Rx(alpha) commute).
+    rows = robot.table.rows
+    mdh = np.array([[rows[k - 1].alpha if k else 0.0, rows[k - 1].a if k else 0.0,
+                     rows[k].theta, rows[k].d] for k in range(len(rows))])
+    tool = np.eye(4)
+    c, s = np.cos(rows[-1].alpha), np.sin(rows[-1].alpha)
+    tool[:3, :3] = [[1, 0, 0], [0, c, -s], [0, s, c]]
+    tool[0, 3] = rows[-1].a
+    tool = tool @ np.asarray(robot.table.T_tool)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "data.npz"
+        np.savez(path, mdh=mdh, tool=tool, world=np.asarray(robot.table.T_base), q=q,
+                 measured=measured, hold_q=hold)
+        run = subprocess.run([python, str(Path(__file__).with_name("pybotics_fit.py")),
+                              str(path)], capture_output=True, text=True)
+    if run.returncode:
+        print(f"\npybotics: failed ({(run.stderr.strip().splitlines() or ['no message'])[-1]})")
+        return
+    doc = json.loads(run.stdout)
+    error = np.linalg.norm(np.array(doc["holdout_positions"]) - hold_p, axis=-1).mean()
+    nominal = np.linalg.norm(np.array(doc["nominal_holdout_positions"]) - hold_p, axis=-1).mean()
+    print(f"\npybotics (same data, UR10-like, 700 measurements, every parameter moved; its "
+          f"OptimizationHandler with the whole chain, the tool position and the world frame "
+          f"free, scipy least_squares on its residuals, at most 30 evaluations): hold-out mean "
+          f"{nominal * 1e3:.3f} -> {error * 1e3:.4f} mm (armkit "
+          f"{result.holdout_before.mean() * 1e3:.3f} -> {result.holdout_after.mean() * 1e3:.4f}), "
+          f"one solve {doc['seconds']:.2f} s "
+          f"({doc['evaluations']} evaluations, status {doc['status']}); largest parameter "
+          f"change {doc['largest_length_change_m'] * 1e3:.1f} mm, "
+          f"{np.rad2deg(doc['largest_angle_change_rad']):.2f} deg")
 
 
 def _trial(robot, n, chosen, every, rng):
@@ -297,7 +418,7 @@ def _trial(robot, n, chosen, every, rng):
         q = pool[select_poses(robot, pool, n)]
     else:
         q = rng.uniform(robot.lower, robot.upper, (n, robot.n))
-    measured = armkit.fk(actual, q)[:, :3, 3] + rng.normal(0, 0.05e-3, (n, 3))
+    measured = armkit.fk(actual, q)[:, :3, 3] + rng.normal(0, SIGMA, (n, 3))
     return q, measured, hold, hold_p, calibrate(robot, q, measured, holdout=(hold, hold_p))
 
 

@@ -170,3 +170,32 @@ def test_accuracy_bad_input(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("# units: mm\ncommanded_x,commanded_y\n1,2\n", encoding="utf-8")
     _bad_input(armkit_cli("accuracy", bad), "bad.csv: header: expected the columns")
+
+
+def test_calibrate_names_what_the_second_pass_adds(tmp_path):
+    """UR5 with every parameter off nominal, noise-free: the parameters that only look
+    dependent at nominal are listed as identified at the fitted values, in JSON and text."""
+    from armkit.calibration.identify import identified_robot, parametric_model
+
+    robot = armkit.robot("ur5")
+    model = parametric_model(robot)
+    rng = np.random.default_rng(2)
+    truth = model.nominal + np.where(model.angular, np.deg2rad(0.2), 5e-4) * rng.normal(
+        size=len(model.names))
+    q = rng.uniform(-np.pi, np.pi, (120, 6))
+    p = armkit.fk(identified_robot(model, truth), q)[:, :3, 3]
+    path = tmp_path / "ur5_measurements.csv"
+    rows = [",".join(f"{v:.12g}" for v in (*np.rad2deg(qi), *pi)) for qi, pi in zip(q, p)]
+    path.write_text("# units: m deg\nshoulder_pan,shoulder_lift,elbow,wrist1,wrist2,wrist3,x,y,z\n"
+                    + "\n".join(rows) + "\n")
+    run = armkit_cli("calibrate", "ur5", path, "--json")
+    assert run.returncode == 0, run.stderr
+    doc = json.loads(run.stdout)
+    assert len(doc["added_at_fit"]) == 2
+    assert all(n.startswith("wrist2.") and n not in doc["unidentifiable"]
+               for n in doc["added_at_fit"])
+    assert doc["holdout_after"]["max"] < 1e-7
+    run = armkit_cli("calibrate", "ur5", path)
+    assert run.returncode == 0, run.stderr
+    assert "identified at the fitted values" in run.stdout
+    assert all(f"  {n} (" in run.stdout for n in doc["added_at_fit"])

@@ -16,17 +16,21 @@ per radian and turns the tool by w; a translation along w moves it by w.
 Identifiability: QR with column pivoting of the Jacobian with unit columns (Hollerbach and
 Wampler, 1996). Parameters past the numerical rank are held at nominal, and each is named with
 the identifiable combination that has the same effect. Only the identifiable set is fitted
-(Gauss-Newton); its standard deviations come from the residuals, and its observability from the
-scaled Jacobian's singular values: the condition number and O1 = (s_1 ... s_L)^(1/L) / sqrt(m)
-(Borm and Menq, 1991). `select_poses` picks, from a pool, the configurations that maximise
-det(J^T J) of the identifiable set (greedy D-optimal design).
+(Gauss-Newton on the normal equations). Nominal values can hide parameters that the true arm
+shows (a tool point on the last axis makes two of the wrist's parameters act as others do), so
+a second pass at the fitted values adds each held parameter whose effect there is distinct and
+significant against the residual noise (a score test), and fits again. The standard deviations
+come from the residuals, and the observability from the scaled Jacobian's singular values: the
+condition number and O1 = (s_1 ... s_L)^(1/L) / sqrt(m) (Borm and Menq, 1991).
+`select_poses` picks, from a pool, the configurations that maximise det(J^T J) of the
+identifiable set (greedy D-optimal design).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
+import numba
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
@@ -39,7 +43,6 @@ from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_array, as_transform, invert, log_so3, translation
 
 PARTS = ("table", "base", "tool")
-_PLANES = ((1, 2), (2, 0), (0, 1))     # the columns a rotation about x, y or z mixes
 _AXES = {"rx": (0, True), "ry": (1, True), "rz": (2, True),
          "tx": (0, False), "ty": (1, False), "tz": (2, False)}
 
@@ -66,6 +69,10 @@ class ParametricModel:
         True for angles (rad), False for lengths (m).
     factors : tuple
         Constant (4, 4) arrays and elementary motions, in product order.
+    codes, signs, constants : ndarray, shapes (F, 3), (F,), (F, 4, 4)
+        The factors as the compiled kernel takes them: per factor its kind (0-2 rotation
+        about x, y, z; 3-5 translation along x, y, z; 6 constant), parameter and joint index
+        (-1 for none), the motion's sign, and the constant (identity for a motion).
     """
 
     robot: Robot
@@ -74,6 +81,9 @@ class ParametricModel:
     angular: NDArray
     factors: tuple
     inner: tuple[int, int]
+    codes: NDArray
+    signs: NDArray
+    constants: NDArray
 
 
 def _frame_aligning(axis: NDArray, point: NDArray) -> NDArray:
@@ -172,8 +182,17 @@ def parametric_model(robot: Robot, parts=PARTS) -> ParametricModel:
     if "tool" in parts:
         factors += frame_params("T_tool", True)
     nominal_a, angular_a = np.array(nominal, dtype=float), np.array(angular, dtype=bool)
+    kinds = ("rx", "ry", "rz", "tx", "ty", "tz")
+    codes = np.array([(6, -1, -1) if isinstance(f, np.ndarray)
+                      else (kinds.index(f.kind), f.param, f.joint) for f in factors],
+                     dtype=np.int64).reshape(-1, 3)
+    signs = np.array([1.0 if isinstance(f, np.ndarray) else f.sign for f in factors])
+    constants = np.array([f if isinstance(f, np.ndarray) else np.eye(4) for f in factors],
+                         dtype=float).reshape(-1, 4, 4)
+    for a in (nominal_a, angular_a, codes, signs, constants):
+        a.flags.writeable = False
     return ParametricModel(robot, tuple(names), nominal_a, angular_a, tuple(factors),
-                           (start, stop))
+                           (start, stop), codes, signs, constants)
 
 
 def _constant(kind: str, value: float) -> NDArray:
@@ -205,49 +224,93 @@ def evaluate(model: ParametricModel, params: NDArray, Q: NDArray,
         Rows 0-2: the tool position's derivative (m per parameter unit); rows 3-5: the tool
         rotation's, as an angular velocity in the base frame (rad per parameter unit).
     """
-    m = len(Q)
-    # The running product as its four columns, each (3, m): right-multiplying by an
-    # elementary motion updates two columns (or one), not the whole batch of 4x4 products.
-    T = np.zeros((4, 3, m))
-    T[0, 0], T[1, 1], T[2, 2] = 1.0, 1.0, 1.0
-    records = []
-    for f in model.factors:
-        if isinstance(f, np.ndarray):
-            T = np.einsum("jk,jim->kim", f, T)
+    Q = np.ascontiguousarray(Q, dtype=float)
+    T, J = _evaluate_kernel(model.codes, model.signs, model.constants,
+                            np.ascontiguousarray(params, dtype=float), Q, jacobian)
+    return T, (J if jacobian else None)
+
+
+@numba.njit(cache=True, nogil=True)
+def _evaluate_kernel(codes, signs, constants, params, Q, jacobian):
+    """`evaluate` compiled: per configuration, the product of the factors kept as its four
+    columns C[0..3] (x, y, z, position; right-multiplying by an elementary motion changes one
+    or two of them), with the axis and origin of every parametrised motion recorded for the
+    Jacobian. Scalar loops only: array expressions would multiply the compile time."""
+    m, F, P = Q.shape[0], codes.shape[0], params.shape[0]
+    T = np.zeros((m, 4, 4))
+    J = np.zeros((m if jacobian else 0, 6, P))
+    records = np.zeros((F, 6))               # per factor: axis, origin after it
+    C = np.zeros((4, 3))
+    new = np.zeros((4, 3))
+    for i in range(m):
+        for c in range(4):
+            for e in range(3):
+                C[c, e] = 1.0 if c == e else 0.0
+        for f in range(F):
+            kind, k, joint = codes[f, 0], codes[f, 1], codes[f, 2]
+            if kind == 6:
+                for c in range(4):
+                    for e in range(3):
+                        v = constants[f, 0, c] * C[0, e] + constants[f, 1, c] * C[1, e] \
+                            + constants[f, 2, c] * C[2, e]
+                        if c == 3:
+                            v += C[3, e]
+                        new[c, e] = v
+                for c in range(4):
+                    for e in range(3):
+                        C[c, e] = new[c, e]
+                continue
+            v = 0.0
+            if joint >= 0:
+                v += Q[i, joint]
+            if k >= 0:
+                v += params[k]
+            v *= signs[f]
+            a = kind % 3
+            if kind < 3:
+                p = (a + 1) % 3                  # the columns a rotation about a mixes
+                q = (a + 2) % 3
+                cv = np.cos(v)
+                sv = np.sin(v)
+                for e in range(3):
+                    cp = C[p, e]
+                    cq = C[q, e]
+                    C[p, e] = cv * cp + sv * cq
+                    C[q, e] = cv * cq - sv * cp
+            else:
+                for e in range(3):
+                    C[3, e] += v * C[a, e]
+            if jacobian and k >= 0:
+                for e in range(3):
+                    records[f, e] = C[a, e]
+                    records[f, 3 + e] = C[3, e]
+        for c in range(4):
+            for e in range(3):
+                T[i, e, c] = C[c, e]
+        T[i, 3, 3] = 1.0
+        if not jacobian:
             continue
-        if f.joint >= 0:
-            v = Q[:, f.joint] + params[f.param] if f.param >= 0 else Q[:, f.joint]
-            c_s = (np.cos, np.sin)
-        else:                                # one amount for the whole batch: a scalar
-            v = float(params[f.param])
-            c_s = (math.cos, math.sin)
-        v = f.sign * v
-        axis, rotation = _AXES[f.kind]
-        if rotation:
-            i, j = _PLANES[axis]
-            c, s = c_s[0](v), c_s[1](v)
-            T[i], T[j] = c * T[i] + s * T[j], c * T[j] - s * T[i]
-        else:
-            T[3] = T[3] + v * T[axis]
-        if jacobian and f.param >= 0:
-            records.append((f, T[axis].copy(), T[3].copy()))
-    out = np.zeros((m, 4, 4))
-    out[:, :3, :] = np.transpose(T, (2, 1, 0))
-    out[:, 3, 3] = 1.0
-    if not jacobian:
-        return out, None
-    J = np.zeros((len(model.names), 6, m))
-    p = T[3]
-    for f, axis, origin in records:
-        if _AXES[f.kind][1]:
-            d = p - origin
-            J[f.param, :3] += f.sign * np.array([axis[1] * d[2] - axis[2] * d[1],
-                                                 axis[2] * d[0] - axis[0] * d[2],
-                                                 axis[0] * d[1] - axis[1] * d[0]])
-            J[f.param, 3:] += f.sign * axis
-        else:
-            J[f.param, :3] += f.sign * axis
-    return out, np.transpose(J, (2, 1, 0))
+        for f in range(F):
+            k = codes[f, 1]
+            if k < 0 or codes[f, 0] == 6:
+                continue
+            sg = signs[f]
+            w0, w1, w2 = records[f, 0], records[f, 1], records[f, 2]
+            if codes[f, 0] < 3:
+                d0 = C[3, 0] - records[f, 3]
+                d1 = C[3, 1] - records[f, 4]
+                d2 = C[3, 2] - records[f, 5]
+                J[i, 0, k] += sg * (w1 * d2 - w2 * d1)
+                J[i, 1, k] += sg * (w2 * d0 - w0 * d2)
+                J[i, 2, k] += sg * (w0 * d1 - w1 * d0)
+                J[i, 3, k] += sg * w0
+                J[i, 4, k] += sg * w1
+                J[i, 5, k] += sg * w2
+            else:
+                J[i, 0, k] += sg * w0
+                J[i, 1, k] += sg * w1
+                J[i, 2, k] += sg * w2
+    return T, J
 
 
 # --- identifiability -----------------------------------------------------------------------------
@@ -354,6 +417,10 @@ class CalibrationResult:
     condition_number, o1 : float
         Of the scaled identification Jacobian (identifiable columns).
     iterations : int
+    added : dict
+        Parameters held at nominal by the analysis at the nominal values but identified at the
+        fitted ones (the second pass), each with the significance of its effect there
+        (standard deviations of the residual noise).
     """
 
     success: bool
@@ -373,6 +440,7 @@ class CalibrationResult:
     condition_number: float
     o1: float
     iterations: int
+    added: dict
 
 
 def _measurements(robot: Robot, q: ArrayLike, measured: ArrayLike, name: str):
@@ -411,8 +479,15 @@ def _position_errors(T: NDArray, M: NDArray) -> NDArray:
 def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
               holdout: tuple[ArrayLike, ArrayLike] | None = None, parts=PARTS,
               rank_tol: float = 1e-7, rotation_weight: float = 0.1,
-              iterations: int = 50) -> CalibrationResult:
+              iterations: int = 50, significance: float = 2.0) -> CalibrationResult:
     """Identify the robot's table, base and tool from measurements at joint values.
+
+    The parameters identifiable at the nominal values are fitted first (Gauss-Newton). Some
+    held ones only look unidentifiable at nominal, whose special geometry (a tool point on the
+    last axis, exactly perpendicular or parallel axes) hides them; a second pass at the fitted
+    values adds each held parameter whose effect there, beyond the fitted ones', is both
+    numerically distinct (at least ``ADDED_TOL`` of its size) and significant against the
+    residual noise (``significance`` standard deviations), then fits again.
 
     Parameters
     ----------
@@ -429,6 +504,9 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
         Relative size of a QR pivot below which parameters are taken as unidentifiable.
     rotation_weight : float
         m per rad: weight of pose measurements' rotation residuals against their positions.
+    significance : float
+        How many standard deviations of the residual noise a held parameter's effect at the
+        fitted values must reach to be added; ``inf`` keeps the nominal analysis only.
 
     Returns
     -------
@@ -443,36 +521,34 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
     if holdout is not None:
         Qh, Mh = _measurements(robot, holdout[0], holdout[1], "holdout")
     model = parametric_model(robot, parts)
-    params = model.nominal.copy()
 
-    def rows(params, jac=True):
-        T, J = evaluate(model, params, Q, jac)
-        r = _residual(T, M, rotation_weight).ravel()
-        return T, r, (None if J is None else _rows(J, M, rotation_weight).reshape(len(r), -1))
+    weights = np.array([1.0, 1.0, 1.0] + [rotation_weight if M.ndim == 3 else 0.0] * 3)
 
-    T0, r, J = rows(params)
-    found = identifiability(J, model.names, rank_tol)
+    def system(params):
+        """Poses, residual, and the normal equations J^T J, J^T r of all the parameters."""
+        T, J = evaluate(model, params, Q)
+        r = _residual(T, M, rotation_weight)
+        A = _rows(J, M, rotation_weight)                        # (m, rows per measurement, P)
+        return T, r.ravel(), _gram_kernel(J, weights), np.einsum("mip,mi->p", A, r), A
+
+    T, r, G, g, A = system(model.nominal)
+    found = identifiability(A.reshape(-1, A.shape[-1]), model.names, rank_tol)
     free = found.identifiable
-    before = _position_errors(T0, M)
-    cost, done = r @ r, 0
-    for done in range(1, iterations + 1):
-        step = _gauss_newton_step(J[:, free], r)
-        for _ in range(10):                  # halve a step that does not lower the cost
-            trial = params.copy()
-            trial[free] += step
-            T_trial, r_trial, J_trial = rows(trial)
-            if r_trial @ r_trial <= cost:
-                break
-            step /= 2
-        else:
-            break                            # converged to rounding: no step lowers the cost
-        improved = cost - r_trial @ r_trial
-        params, T, r, J, cost = trial, T_trial, r_trial, J_trial, r_trial @ r_trial
-        if improved <= 1e-12 * cost or np.abs(step).max() < 1e-14:
+    before = _position_errors(T, M)
+    state, done = _gauss_newton(system, model.nominal.copy(), free, (T, r, G, g), iterations)
+    added: dict[str, float] = {}
+    for _ in range(3):                       # each pass at the values the last fit reached
+        params, T, r, G, g = state
+        new = _significant_held(G, g, r @ r, len(r), free, significance)
+        if not new:
             break
-    Jf = J[:, free]
-    norms = np.linalg.norm(Jf, axis=0)
-    gram = np.einsum("ij,ik->jk", Jf, Jf) / np.outer(norms, norms)          # of the scaled Jacobian
+        added.update({model.names[k]: z for k, z in new.items()})
+        free = np.sort(np.concatenate([free, list(new)]))
+        state, more = _gauss_newton(system, params, free, (T, r, G, g), iterations)
+        done += more
+    params, T, r, G, g = state
+    norms = np.sqrt(np.diag(G)[free])
+    gram = G[np.ix_(free, free)] / np.outer(norms, norms)    # of the scaled Jacobian
     s = np.sqrt(np.clip(np.linalg.eigvalsh(gram), 0, None))[::-1]
     dof = max(len(r) - len(free), 1)
     cov = (r @ r) / dof * np.linalg.pinv(gram) / np.outer(norms, norms)
@@ -488,23 +564,133 @@ def calibrate(robot: Robot, q: ArrayLike, measured: ArrayLike, *,
         hold_before = hold_after = np.zeros(0)
     after = _position_errors(T, M)
     success = bool(np.all(np.isfinite(params)))
+    dependencies = {n: c for n, c in found.dependencies.items() if n not in added}
     return CalibrationResult(
         success, "ok" if success else "the solve diverged", identified, model.names,
         model.nominal, params, std, model.angular,
-        np.isin(np.arange(len(params)), free), found.dependencies, before, after,
-        hold_before, hold_after, condition, o1, done)
+        np.isin(np.arange(len(params)), free), dependencies, before, after,
+        hold_before, hold_after, condition, o1, done, added)
 
 
-def _gauss_newton_step(J: NDArray, r: NDArray) -> NDArray:
-    """The least-squares step J^+ r through the normal equations of J with unit columns:
-    the identifiable set is well conditioned (its scaled condition number is reported), and a
-    P x P solve costs far less than a QR of thousands of rows."""
-    norms = np.linalg.norm(J, axis=0)
+# A held parameter is added at the fitted values only when its effect there, beyond the fitted
+# parameters', is at least this fraction of its own: below it, its whole effect on a
+# measurement is under 1e-4 of the parameter's error times its lever (0.1 um per mm of error
+# on a 1 m arm), and its estimate would swing by metres on noise (a length along one of two
+# nearly parallel axes is such a parameter).
+ADDED_TOL = 1e-4
+
+# The residual's standard deviation is taken as at least this (m): below it, measurements and
+# model agree to rounding and there is nothing left to explain.
+_SIGMA_FLOOR = 1e-12
+
+# Residuals (m) at which a fit has met the measurements to rounding.
+_ROUNDING = 1e-14
+
+
+def _significant_held(G: NDArray, g: NDArray, rr: float, rows: int, free: NDArray,
+                      significance: float) -> dict[int, float]:
+    """Held parameters to add at the fitted values, with their significance.
+
+    From the normal equations G = J^T J, g = J^T r and rr = r^T r of all the parameters:
+    greedily, the held parameter whose column beyond the span of the fitted ones explains the
+    most of the residual, while that reaches `significance` standard deviations of the
+    residual noise (a score test of the parameter at its nominal value) and its column beyond
+    the fitted ones is at least ADDED_TOL of its length. The parts beyond come from the Schur
+    complement of the fitted block in G with unit columns; their rounding error is about
+    1e-16 times that block's condition number (the square of the one reported), far below
+    ADDED_TOL ** 2 for any set the first pass accepts."""
+    if not np.isfinite(significance):
+        return {}
+    d = np.sqrt(np.clip(np.diag(G), 0, None))
+    held = np.setdiff1d(np.flatnonzero(d > 1e-12 * d.max()), free)
+    if held.size == 0:
+        return {}
+    Gs, gs = G / np.outer(d, d).clip(1e-300), g / d.clip(1e-300)
+    Gff = Gs[np.ix_(free, free)]
+    X = np.linalg.solve(Gff, np.column_stack([Gs[np.ix_(free, held)], gs[free]]))
+    S = Gs[np.ix_(held, held)] - Gs[np.ix_(free, held)].T @ X[:, :-1]  # Gram of the parts beyond
+    s = gs[held] - Gs[np.ix_(free, held)].T @ X[:, -1]                 # and their scores
+    rr = rr - gs[free] @ X[:, -1]
+    dof = rows - len(free)
+    chosen: dict[int, float] = {}
+    while dof > 1:
+        size2 = np.diag(S).copy()
+        live = size2 > ADDED_TOL ** 2
+        if not live.any():
+            break
+        sigma = max(np.sqrt(max(rr, 0.0) / dof), _SIGMA_FLOOR)
+        z = np.where(live, np.abs(s) / np.sqrt(np.where(live, size2, 1.0)) / sigma, 0.0)
+        best = int(np.argmax(z))
+        if z[best] < significance:
+            break
+        chosen[int(held[best])] = float(z[best])
+        column, score = S[:, best].copy(), s[best]
+        rr -= score ** 2 / size2[best]
+        s = s - column * score / size2[best]
+        S = S - np.outer(column, column) / size2[best]
+        S[best, :] = S[:, best] = 0.0
+        dof -= 1
+    return chosen
+
+
+def _gauss_newton(system, params: NDArray, free: NDArray, current: tuple, iterations: int):
+    """Gauss-Newton on the parameters `free` from `params`, whose (T, r, G, g) are `current`;
+    a step that does not lower the cost is halved. It stops when the next step would move
+    the parameters by less than 1 % of their standard deviations (its predicted decrease of
+    the cost, step^T G step, below 1e-4 of the residual variance), when the residuals are at
+    rounding or no step lowers the cost, or after `iterations`.
+    Returns (params, T, r, G, g) at the end and the iterations done."""
+    T, r, G, g = current
+    cost, done = r @ r, 0
+    for done in range(1, iterations + 1):
+        if cost <= len(r) * _ROUNDING ** 2:
+            break                            # the model meets the measurements to rounding
+        step = _gauss_newton_step(G[np.ix_(free, free)], g[free])
+        if step @ g[free] <= 1e-4 * cost / max(len(r) - len(free), 1):
+            break
+        for _ in range(10):                  # halve a step that does not lower the cost
+            trial = params.copy()
+            trial[free] += step
+            new = system(trial)
+            if new[1] @ new[1] <= cost:
+                break
+            step /= 2
+        else:
+            break                            # converged to rounding: no step lowers the cost
+        params, (T, r, G, g, _) = trial, new
+        cost = r @ r
+        if np.abs(step).max() < 1e-14:
+            break
+    return (params, T, r, G, g), done
+
+
+@numba.njit(cache=True, nogil=True)
+def _gram_kernel(J, weights):
+    """sum over measurements and rows k of (weights[k] J[i, k])^T (weights[k] J[i, k]): the
+    normal matrix (P, P) of J (m, 6, P) on one thread (a BLAS product of this tall, thin
+    matrix waits for its threads on a busy machine)."""
+    m, rows, P = J.shape
+    G = np.zeros((P, P))
+    for i in range(m):
+        for k in range(rows):
+            w2 = weights[k] * weights[k]
+            if w2 == 0.0:
+                continue
+            for a in range(P):
+                x = J[i, k, a] * w2
+                if x != 0.0:
+                    for b in range(P):
+                        G[a, b] += x * J[i, k, b]
+    return G
+
+
+def _gauss_newton_step(G: NDArray, g: NDArray) -> NDArray:
+    """The least-squares step J^+ r from the normal equations G = J^T J, g = J^T r, solved
+    with unit columns: the identifiable set is well conditioned (its scaled condition number
+    is reported), and a P x P solve costs far less than a QR of thousands of rows."""
+    norms = np.sqrt(np.diag(G))
     norms = np.where(norms > 0, norms, 1.0)
-    Js = J / norms
-    # einsum, not @: a BLAS call on a tall, thin matrix spends more in its threads than in
-    # the arithmetic, worst on a busy machine.
-    return np.linalg.solve(np.einsum("ij,ik->jk", Js, Js), np.einsum("ij,i->j", Js, r)) / norms
+    return np.linalg.solve(G / np.outer(norms, norms), g / norms) / norms
 
 
 def identified_robot(model: ParametricModel, params: NDArray) -> Robot:

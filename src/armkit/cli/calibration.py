@@ -183,6 +183,7 @@ def calibrate_command(
            "unidentifiable": {n: {o: c * factor[result.names.index(o)]
                                   / factor[result.names.index(n)] for o, c in comb.items()}
                               for n, comb in result.dependencies.items()},
+           "added_at_fit": result.added,
            "residuals_before": _stats(result.residuals_before, length),
            "residuals_after": _stats(result.residuals_after, length),
            "holdout_before": _stats(result.holdout_before, length),
@@ -215,6 +216,11 @@ def _show_calibration(doc: dict, model) -> None:
         if p["identifiable"]:
             stdout.print(f"  {p['name']:<18} {p['nominal']:>12.6g} -> {p['identified']:<14.9g} "
                          f"± {p['std']:.2g} {p['unit']}")
+    if doc["added_at_fit"]:
+        stdout.print("held by the analysis at nominal, identified at the fitted values "
+                     "(significance, standard deviations of the noise):")
+        for name, z in doc["added_at_fit"].items():
+            stdout.print(f"  {name} ({z:.3g})")
     stdout.print("held at nominal (not identifiable from these measurements):")
     for name, comb in doc["unidentifiable"].items():
         stdout.print(f"  {dependency_text(name, comb)}")
