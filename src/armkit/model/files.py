@@ -189,7 +189,8 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
             raise ModelFileError(path, "urdf", "a URDF file (its path relative to this file)",
                                  f"{found_text(spec.urdf)}, which is not a file")
         found = read_urdf(urdf, spec.tip)
-        table = URDFTable(found.path, found.tip, found.joints, T_base, T_tool)
+        table = URDFTable(found.path, found.tip, found.joints, T_base, T_tool,
+                          collisions=found.collisions, detached=found.detached)
         chain = chain_from_urdf(table)
     elif isinstance(spec, ScrewFile):
         rows = tuple(_screw_row(j, i, units) for i, j in enumerate(spec.joints))
