@@ -417,10 +417,12 @@ def urdf_refuse(rng: random.Random, text: str, tip: str) -> tuple[str, str, str]
         joint.set("type", rng.choice(["spherical", "Revolute", "", "ball", "screw"]))
         return "unknown joint type", _xml(root), f"joint '{joint.get('name')}' type"
     if choice == 11 and moving:
+        # A mimic joint on the chain is a model of its own; one that follows no moving joint
+        # of the file (a fixed one, or none) is invalid.
         joint = rng.choice(moving)
-        other = rng.choice(joints).get("name")
-        ET.SubElement(joint, "mimic", joint=other, multiplier="1")
-        return "mimic on the chain", _xml(root), f"joint '{joint.get('name')}' <mimic>"
+        fixed = [j.get("name") for j in joints if j.get("type") == "fixed"]
+        ET.SubElement(joint, "mimic", joint=rng.choice(fixed + ["ghost_joint"]), multiplier="1")
+        return "mimic of no moving joint", _xml(root), f"joint '{joint.get('name')}' <mimic>"
     if choice == 12:
         joint = rng.choice(chain)
         joint.set("type", rng.choice(["floating", "planar"]))

@@ -28,8 +28,8 @@ def test_serial_and_parallel_kernels_agree():
     Q = random_q(robot, 2 * _kernels.GRAIN + 5)
     k = robot.chain.kernel
     a, b = np.empty((len(Q), 4, 4)), np.empty((len(Q), 4, 4))
-    _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, a)
-    _kernels.poses_parallel(Q, k.kinds, k.offsets, k.pre, k.links, b)
+    _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, a)
+    _kernels.poses_parallel(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, b)
     np.testing.assert_array_equal(a, b)
 
 

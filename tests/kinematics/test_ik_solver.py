@@ -151,6 +151,11 @@ def test_thread_count_follows_the_batch_size():
     assert thread_count(TARGETS_PER_THREAD - 1, threads=8) == 1
     assert thread_count(10 * TARGETS_PER_THREAD, threads=2) == 2
     assert thread_count(10 * TARGETS_PER_THREAD, threads=1) == 1
+    armkit.set_num_threads(1)           # the process-wide bound applies when none is given
+    try:
+        assert thread_count(10 * TARGETS_PER_THREAD) == 1
+    finally:
+        armkit.set_num_threads(None)
     robot = armkit.robot("ur5")
     T = armkit.fk(robot, random_q(robot, 3 * TARGETS_PER_THREAD, seed=36))
     one = IKSolver(robot, threads=1).solve(T, method="lm")

@@ -4,6 +4,7 @@ asked for and match Pinocchio's forward kinematics (an independent reference) to
 from __future__ import annotations
 
 import importlib.metadata
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pinocchio as pin
@@ -81,14 +82,77 @@ def test_limits_come_from_the_file():
     np.testing.assert_allclose(robot.chain.velocity_limits[[0, 6]], [2.175, 2.61])
 
 
-def test_a_mimic_joint_on_the_chain_is_refused_by_name():
-    path = robot_file("panda_description/urdf/panda.urdf")
-    with pytest.raises(ModelFileError) as err:
-        read_urdf(path, tip="panda_rightfinger")
-    assert str(err.value).startswith(path)
-    assert ("joint 'panda_finger_joint2' <mimic>: expected independent joints on the chain to "
-            "'panda_rightfinger'") in str(err.value)
-    assert "found a mimic of joint 'panda_finger_joint1'" in str(err.value)
+# Chains through mimic joints: (file, tip, joint values, moving joints on the chain).
+MIMIC_CHAINS = [
+    ("panda_description/urdf/panda.urdf", "panda_rightfinger", 8, 8),   # leader off the chain
+    ("talos_data/robots/talos_full_v2.urdf", "gripper_left_fingertip_1_link", 10, 11),
+    ("talos_data/robots/talos_full_v2.urdf", "gripper_left_fingertip_3_link", 10, 11),
+    ("pr2_description/urdf/pr2.urdf", "r_gripper_l_finger_tip_link", 9, 10),
+]
+
+
+def file_mimics(path: str) -> dict[str, tuple[str, float, float]]:
+    """Each mimic joint's (leader, multiplier, offset), read from the file with ElementTree."""
+    out = {}
+    for joint in ET.parse(path).getroot().iter("joint"):
+        m = joint.find("mimic")
+        if m is not None:
+            out[joint.get("name")] = (m.get("joint"), float(m.get("multiplier", "1")),
+                                      float(m.get("offset", "0")))
+    return out
+
+
+@pytest.mark.parametrize("suffix, tip, n, moving", MIMIC_CHAINS,
+                         ids=[c[1] for c in MIMIC_CHAINS])
+def test_a_chain_through_mimic_joints_matches_pinocchio(suffix, tip, n, moving):
+    path = robot_file(suffix)
+    robot = armkit.load_robot(path, tip=tip)
+    assert (robot.n, robot.chain.n_joints) == (n, moving)
+    mimics = file_mimics(path)
+    assert not set(robot.joint_names) & set(mimics)         # a mimic joint has no value
+    model = pin.buildModelFromUrdf(path)                   # every joint independent
+    data = model.createData()
+    frame = model.getFrameId(tip)
+    Q = np.random.default_rng(3).uniform(*robot.chain.sampling_limits, (20, n))
+    for q in Q:
+        values = dict(zip(robot.joint_names, q))
+        coupling = np.zeros((model.nv, n))                 # d(pinocchio's v)/d(armkit's q)
+        for k, name in enumerate(robot.joint_names):
+            coupling[model.joints[model.getJointId(name)].idx_v, k] = 1.0
+        for name, (leader, m, b) in mimics.items():
+            if leader in values:
+                values[name] = m * values[leader] + b
+                k = robot.joint_names.index(leader)
+                coupling[model.joints[model.getJointId(name)].idx_v, k] = m
+        qp = pin.neutral(model)
+        for name, v in values.items():
+            joint = model.joints[model.getJointId(name)]
+            qp[joint.idx_q:joint.idx_q + joint.nq] = [np.cos(v), np.sin(v)] if joint.nq == 2 else v
+        pin.computeJointJacobians(model, data, qp)
+        pin.updateFramePlacements(model, data)
+        J = pin.getFrameJacobian(model, data, frame, pin.LOCAL_WORLD_ALIGNED) @ coupling
+        np.testing.assert_allclose(armkit.fk(robot, q), data.oMf[frame].homogeneous,
+                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(armkit.jacobian(robot, q), J, rtol=0, atol=1e-12)
+    # The leaders' limits keep every mimic joint within its own.
+    lower = {j.name: j.limits.lower for j in robot.chain.joints}
+    upper = {j.name: j.limits.upper for j in robot.chain.joints}
+    for name, (leader, m, b) in mimics.items():
+        if name in lower:
+            k = robot.joint_names.index(leader)
+            ends = m * np.array([robot.lower[k], robot.upper[k]]) + b
+            assert lower[name] - 1e-12 <= ends.min() and ends.max() <= upper[name] + 1e-12
+
+
+def test_ik_through_a_mimic_finger():
+    robot = armkit.load_robot(robot_file("panda_description/urdf/panda.urdf"),
+                              tip="panda_rightfinger")
+    q = np.random.default_rng(5).uniform(*robot.chain.sampling_limits, (50, robot.n))
+    found = armkit.ik(robot, armkit.fk(robot, q), mask="position", seed=1)
+    assert found.success.all()
+    np.testing.assert_allclose(armkit.fk(robot, found.q)[:, :3, 3], armkit.fk(robot, q)[:, :3, 3],
+                               rtol=0, atol=1e-9)
+    assert ((found.q >= robot.lower) & (found.q <= robot.upper)).all()
 
 
 def test_a_tree_without_a_named_tip_lists_its_leaves():

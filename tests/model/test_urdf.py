@@ -62,7 +62,20 @@ def test_unknown_tip(tree):
     ('xyz="0.1 0 0"', 'xyz="0.1 0 nan"', "<origin> xyz: expected 3 finite numbers"),
     ('velocity="0.2"', 'velocity="fast"', "<limit> velocity: expected a finite number, found 'fast'"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 zero"/>', "<axis> xyz: expected 3 finite numbers"),
-    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="yaw"/>', "expected independent"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="yaw"/>',
+     "joint 'slide' <mimic> joint: expected a joint of its own kind (prismatic), found 'yaw', "
+     "continuous"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="ghost"/>',
+     "joint 'slide' <mimic> joint: expected the name of a joint of the file, found 'ghost'"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="hand_mount"/>',
+     "joint 'slide' <mimic> joint: expected an independent moving joint, found 'hand_mount', "
+     "a fixed joint"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic/>',
+     "joint 'slide' <mimic> joint: expected the name of the joint it mimics, found none"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="yaw" multiplier="true"/>',
+     "joint 'slide' <mimic> multiplier: expected a finite number, found 'true'"),
+    ('<axis xyz="1 0 0"/>', '<axis xyz="1 0 0"/><mimic joint="yaw" offset="1e400"/>',
+     "joint 'slide' <mimic> offset: expected a finite number"),
     ('<axis xyz="1 0 0"/>', '<axis xyz="0 0 0"/>', "<axis> xyz: expected a non-zero direction"),
     ("</robot>", "", "expected a readable URDF (XML) file"),
     ("<robot", "<sdf", "expected a <robot> root element, found <sdf>"),
@@ -190,11 +203,36 @@ def test_joints_off_the_chain_are_ignored(tmp_path):
         armkit.fk(armkit.Robot("b", armkit.model.chain_from_urdf(reference)), q))
 
 
-def test_a_mimic_or_floating_joint_on_the_chain_is_refused(tmp_path):
-    path = urdf(tmp_path, TREE.replace("</robot>", MIMIC_FINGER + "</robot>"))
-    refused(path, "joint 'finger_joint' <mimic>: expected independent joints on the chain to "
-            "'finger' (a mimic joint off the chain is ignored), found a mimic of joint 'slide'",
-            tip="finger")
+def test_a_mimic_joint_on_the_chain_moves_with_its_leader(tmp_path):
+    # finger = -0.5 slide + 0.3, within 0 .. 0.04 m: slide within 0.52 .. 0.6 (its own 0 .. 0.7)
+    finger = MIMIC_FINGER.replace('multiplier="-1"', 'multiplier="-0.5" offset="0.3"')
+    text = TREE.replace('upper="0.5" velocity="0.2"', 'upper="0.7" velocity="0.2"')
+    robot = armkit.load_robot(urdf(tmp_path, text.replace("</robot>", finger + "</robot>")),
+                              tip="finger")
+    assert robot.joint_names == ("yaw", "slide") and robot.chain.n_joints == 3
+    np.testing.assert_allclose([robot.lower[1], robot.upper[1]], [0.52, 0.6], rtol=1e-15)
+    q = np.array([np.pi / 2, 0.55])
+    # By hand: yaw turns x onto y; slide 0.1 + 0.55 along it, then the finger -0.5 * 0.55 + 0.3
+    # along the turned y (-x).
+    T = transform(rotz(np.pi / 2), [-(0.3 - 0.275), 0.65, 0.3])
+    np.testing.assert_allclose(armkit.fk(robot, q), T, atol=1e-15)
+    J = armkit.jacobian(robot, q)
+    np.testing.assert_allclose(J[:3, 1], [0.5, 1.0, 0.0], atol=1e-15)   # d(finger)/d(slide)
+    qd, h = np.array([0.7, -0.2]), 1e-6
+    np.testing.assert_allclose(armkit.jacobian_dot(robot, q, qd),
+                               (armkit.jacobian(robot, q + h * qd)
+                                - armkit.jacobian(robot, q - h * qd)) / (2 * h), atol=1e-8)
+    # A mimic joint has no value of its own: the IK answer drives it through its leader.
+    found = armkit.ik(robot, T, mask="position", q0=[0.0, 0.6])
+    assert found.success and abs(found.q[1] - 0.55) < 1e-9
+
+
+def test_a_mimic_joint_whose_range_excludes_its_leaders_is_refused(tmp_path):
+    # finger = -slide within 0 .. 0.04 m needs slide within -0.04 .. 0; its own is 0 .. 0.5.
+    path = urdf(tmp_path, TREE.replace("</robot>", MIMIC_FINGER.replace(
+        'lower="0" upper="0.04"', 'lower="0.01" upper="0.04"') + "</robot>"))
+    refused(path, "joint 'slide' <limit>: expected a range in which its mimic joints "
+            "(finger_joint) stay within their limits, found none", tip="finger")
 
 
 def test_files_that_are_not_files(tmp_path):

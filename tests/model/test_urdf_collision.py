@@ -73,14 +73,14 @@ WHERE_L1 = "link 'l1' <collision>[0]"
      f"{WHERE_L1} <origin> xyz", "3 finite numbers", "'0.2 0'"),
     ('xyz="0.2 0 0" rpy="0 1.5707963267948966 0"', 'xyz="0.2 0 0" rpy="0 pi/2 0"',
      f"{WHERE_L1} <origin> rpy", "3 finite numbers", "'0 pi/2 0'"),
-    ('<box size="0.1 0.3 0.02"/>', '<box size="0.1 0.3"/>', "link 'sensor' <collision>[0] <box> "
-     "size", "3 finite numbers", "'0.1 0.3'"),
-    ('<box size="0.1 0.3 0.02"/>', '<box size="0.1 0 0.02"/>', "link 'sensor' <collision>[0] "
-     "<box> size", "3 positive lengths (m)", "'0.1 0 0.02'"),
+    ('<box size="0.1 0.3 0.02"/>', '<box size="0.1 0.3"/>',
+     "link 'sensor' <collision>[0] <box> size", "3 finite numbers", "'0.1 0.3'"),
+    ('<box size="0.1 0.3 0.02"/>', '<box size="0.1 0 0.02"/>',
+     "link 'sensor' <collision>[0] <box> size", "3 positive lengths (m)", "'0.1 0 0.02'"),
     ('<sphere radius="0.1"/>', '<sphere r="0.1"/>', "link 'base' <collision>[0] <sphere> radius",
      "a positive length (m)", "none"),
-    ('<sphere radius="0.03"/>', '<sphere radius="١"/>', "link 'l2' <collision>[0] <sphere> "
-     "radius", "a finite number", "'١'"),
+    ('<sphere radius="0.03"/>', '<sphere radius="١"/>',
+     "link 'l2' <collision>[0] <sphere> radius", "a finite number", "'١'"),
     ('<geometry><cylinder radius="0.02" length="0.06"/></geometry>',
      '<cylinder radius="0.02" length="0.06"/>',
      "link 'tool' <collision>[0] <geometry>", "a <geometry> element", "none"),

@@ -46,8 +46,8 @@ def test_start_and_goal_free_in_different_compartments(problem, checker):
             checker.resolution
     tool_start = armkit.fk(robot, problem.start)[:3, 3]
     tool_goal = armkit.fk(robot, problem.goal[0])[:3, 3]
-    inside = lambda p: 0.45 < p[0] < 0.75 and -0.4 < p[1] < 0.4      # noqa: E731
-    assert inside(tool_start) and inside(tool_goal)
+    for tool in (tool_start, tool_goal):                             # between the walls
+        assert 0.45 < tool[0] < 0.75 and -0.4 < tool[1] < 0.4
     assert 0.07 < tool_start[2] < 0.40                               # lower compartment
     assert 0.42 < tool_goal[2] < 0.75                                # upper compartment
 

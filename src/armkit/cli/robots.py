@@ -64,9 +64,17 @@ def _joint_rows(robot: Robot, units: Units) -> list[dict]:
         return [{"name": j.name, "type": j.kind, "xyz": to["xyz"](j.xyz), "rpy": to["rpy"](j.rpy),
                  "axis": j.axis, "limits": None if j.limits is None else
                  (units.angle_from_si if j.kind != "prismatic" else units.length_from_si)(
-                     [j.limits.lower, j.limits.upper])}
+                     [j.limits.lower, j.limits.upper]),
+                 **({} if j.mimic is None else {"mimic": _mimic_text(j, units)})}
                 for j in robot.table.joints]
     return robot_document(dataclasses.replace(robot, units=units))["joints"]
+
+
+def _mimic_text(joint, units: Units) -> str:
+    """``leader x multiplier + offset`` of a URDF mimic joint, the offset in `units`."""
+    leader, multiplier, offset = joint.mimic
+    to = units.length_from_si if joint.kind == "prismatic" else units.angle_from_si
+    return f"{leader} x {multiplier:g} + {float(to(offset)):g}"
 
 
 @app.command()
@@ -75,7 +83,7 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
     model = load_robot(robot)
     units = SI if si else model.units
     frames = armkit.fk_frames(model, np.zeros(model.n))
-    names = ["base"] + list(model.joint_names[:-1]) + ["tool"]
+    names = ["base"] + [j.name for j in model.chain.joints[:-1]] + ["tool"]
     frame_rows = [{"frame": name, **pose_view(T, units)} for name, T in zip(names, frames)]
     joints = _joint_rows(model, units)
     collision = _collision_view(model, units)
@@ -87,8 +95,10 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
                            "frames_at_zero": [{k: v for k, v in row.items() if k != "matrix"}
                                               for row in frame_rows],
                            "collision": collision})
-    stdout.print(f"[bold]{model.name}[/bold]  {model.n} joints {_kinds(model)}, "
-                 f"file units {model.units.length}/{model.units.angle}")
+    mimics = model.chain.n_joints + len(model.chain.leaders) - model.n
+    stdout.print(f"[bold]{model.name}[/bold]  {model.n} joints {_kinds(model)}"
+                 + (f" (and {mimics} mimic joint{'s' * (mimics > 1)})" if mimics else "")
+                 + f", file units {model.units.length}/{model.units.angle}")
     if model.description:
         stdout.print(model.description)
     columns = list(dict.fromkeys(key for row in joints for key in row))

@@ -84,55 +84,69 @@ def _store(T, out):
 
 
 @_jit
-def pose_one(q, kinds, offsets, pre, links, out):
+def pose_one(q, kinds, offsets, pre, links, source, scale, out):
     """Tool pose of one configuration q (n,) into out (4, 4); False if q is not finite."""
     T = _start(pre)
     finite = True
-    for i in range(q.shape[0]):
-        finite &= math.isfinite(q[i])
-        T = _then(_move(T, kinds[i], q[i] + offsets[i]), links[i])
+    for i in range(kinds.shape[0]):
+        v = q[source[i]]
+        finite &= math.isfinite(v)
+        T = _then(_move(T, kinds[i], scale[i] * v + offsets[i]), links[i])
     _store(T, out)
     return finite
 
 
 @_jit
-def frames_one(q, kinds, offsets, pre, links, joint_frames, out):
-    """Joint frames after each motion (n, 4, 4) (z is the joint axis) and the tool pose."""
+def frames_one(q, kinds, offsets, pre, links, source, scale, joint_frames, out):
+    """Joint frames after each motion (n_joints, 4, 4) (z is the joint axis) and the tool
+    pose."""
     T = _start(pre)
-    for i in range(q.shape[0]):
-        T = _move(T, kinds[i], q[i] + offsets[i])
+    for i in range(kinds.shape[0]):
+        T = _move(T, kinds[i], scale[i] * q[source[i]] + offsets[i])
         _store(T, joint_frames[i])
         T = _then(T, links[i])
     _store(T, out)
 
 
 @_jit
-def pose_jacobian_one(q, kinds, offsets, pre, links, out, J):
+def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
     """Tool pose into out (4, 4) and the geometric Jacobian (6, n), base frame, into J.
 
-    Column i: revolute ``(z_i x (p - o_i), z_i)``, prismatic ``(z_i, 0)``; z_i the joint axis,
-    o_i a point on it, p the tool origin. Returns False if q is not finite.
+    Column of moving joint i: revolute ``(z_i x (p - o_i), z_i)``, prismatic ``(z_i, 0)``;
+    z_i the joint axis, o_i a point on it, p the tool origin; a mimic joint's column is added,
+    times its multiplier, to its leader's. Returns False if q is not finite.
     """
-    n = q.shape[0]
+    n = kinds.shape[0]
+    coupled = n != J.shape[1]
+    for i in range(n):
+        coupled |= source[i] != i or scale[i] != 1.0
+    # Joint origins and axes in J's columns (or in scratch, when mimic joints share columns).
+    axes = np.empty((6, n)) if coupled else J
     T = _start(pre)
     finite = True
     for i in range(n):
-        finite &= math.isfinite(q[i])
-        T = _move(T, kinds[i], q[i] + offsets[i])
-        J[0, i], J[1, i], J[2, i] = T[3], T[7], T[11]          # o_i, for now
-        J[3, i], J[4, i], J[5, i] = T[2], T[6], T[10]          # z_i
+        v = q[source[i]]
+        finite &= math.isfinite(v)
+        T = _move(T, kinds[i], scale[i] * v + offsets[i])
+        axes[0, i], axes[1, i], axes[2, i] = T[3], T[7], T[11]          # o_i, for now
+        axes[3, i], axes[4, i], axes[5, i] = T[2], T[6], T[10]          # z_i
         T = _then(T, links[i])
     px, py, pz = T[3], T[7], T[11]
     for i in range(n):
-        zx, zy, zz = J[3, i], J[4, i], J[5, i]
+        zx, zy, zz = axes[3, i], axes[4, i], axes[5, i]
         if kinds[i] == 0:
-            dx, dy, dz = px - J[0, i], py - J[1, i], pz - J[2, i]
-            J[0, i] = zy * dz - zz * dy
-            J[1, i] = zz * dx - zx * dz
-            J[2, i] = zx * dy - zy * dx
+            dx, dy, dz = px - axes[0, i], py - axes[1, i], pz - axes[2, i]
+            axes[0, i] = zy * dz - zz * dy
+            axes[1, i] = zz * dx - zx * dz
+            axes[2, i] = zx * dy - zy * dx
         else:
-            J[0, i], J[1, i], J[2, i] = zx, zy, zz
-            J[3, i], J[4, i], J[5, i] = 0.0, 0.0, 0.0
+            axes[0, i], axes[1, i], axes[2, i] = zx, zy, zz
+            axes[3, i], axes[4, i], axes[5, i] = 0.0, 0.0, 0.0
+    if coupled:
+        J[:, :] = 0.0
+        for i in range(n):
+            for r in range(6):
+                J[r, source[i]] += scale[i] * axes[r, i]
     _store(T, out)
     return finite
 
@@ -140,39 +154,39 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, out, J):
 # --- batch loops: Q (N, n) -> outputs with leading N ------------------------------------------
 
 @_jit
-def poses(Q, kinds, offsets, pre, links, out):
+def poses(Q, kinds, offsets, pre, links, source, scale, out):
     for k in range(Q.shape[0]):
-        pose_one(Q[k], kinds, offsets, pre, links, out[k])
+        pose_one(Q[k], kinds, offsets, pre, links, source, scale, out[k])
 
 
 @_pjit
-def poses_parallel(Q, kinds, offsets, pre, links, out):
+def poses_parallel(Q, kinds, offsets, pre, links, source, scale, out):
     for k in numba.prange(Q.shape[0]):
-        pose_one(Q[k], kinds, offsets, pre, links, out[k])
+        pose_one(Q[k], kinds, offsets, pre, links, source, scale, out[k])
 
 
 @_jit
-def frames(Q, kinds, offsets, pre, links, joint_frames, out):
+def frames(Q, kinds, offsets, pre, links, source, scale, joint_frames, out):
     for k in range(Q.shape[0]):
-        frames_one(Q[k], kinds, offsets, pre, links, joint_frames[k], out[k])
+        frames_one(Q[k], kinds, offsets, pre, links, source, scale, joint_frames[k], out[k])
 
 
 @_pjit
-def frames_parallel(Q, kinds, offsets, pre, links, joint_frames, out):
+def frames_parallel(Q, kinds, offsets, pre, links, source, scale, joint_frames, out):
     for k in numba.prange(Q.shape[0]):
-        frames_one(Q[k], kinds, offsets, pre, links, joint_frames[k], out[k])
+        frames_one(Q[k], kinds, offsets, pre, links, source, scale, joint_frames[k], out[k])
 
 
 @_jit
-def pose_jacobians(Q, kinds, offsets, pre, links, out, J):
+def pose_jacobians(Q, kinds, offsets, pre, links, source, scale, out, J):
     for k in range(Q.shape[0]):
-        pose_jacobian_one(Q[k], kinds, offsets, pre, links, out[k], J[k])
+        pose_jacobian_one(Q[k], kinds, offsets, pre, links, source, scale, out[k], J[k])
 
 
 @_pjit
-def pose_jacobians_parallel(Q, kinds, offsets, pre, links, out, J):
+def pose_jacobians_parallel(Q, kinds, offsets, pre, links, source, scale, out, J):
     for k in numba.prange(Q.shape[0]):
-        pose_jacobian_one(Q[k], kinds, offsets, pre, links, out[k], J[k])
+        pose_jacobian_one(Q[k], kinds, offsets, pre, links, source, scale, out[k], J[k])
 
 
 def run(serial, parallel, Q: np.ndarray, *args) -> None:

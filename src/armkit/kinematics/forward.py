@@ -34,38 +34,41 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
     array([-0.81725 , -0.19145 , -0.005491])
     """
     k = robot.chain.kernel
-    if (type(q) is np.ndarray and q.shape == k.offsets.shape and q.dtype == np.float64
+    if (type(q) is np.ndarray and q.shape == robot.chain.lower.shape and q.dtype == np.float64
             and q.flags.c_contiguous):
         # One configuration from Python: straight to the kernel, which also checks finiteness
         # (a non-finite q falls through to joint_array, which says what is wrong).
         out = np.empty((4, 4))
-        if _kernels.pose_one(q, k.kinds, k.offsets, k.pre, k.links, out):
+        if _kernels.pose_one(q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out):
             return out
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     out = np.empty((flat.shape[0], 4, 4))
     _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.kinds, k.offsets, k.pre,
-                 k.links, out)
+                 k.links, k.source, k.scale, out)
     return out.reshape(q.shape[:-1] + (4, 4))
 
 
 def joint_frames(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
-    """Each joint's frame after its motion, whose z axis is the joint axis, and the tool pose.
+    """Each moving joint's frame after its motion, whose z axis is the joint axis, and the
+    tool pose.
 
     Returns
     -------
-    frames : ndarray, shape (..., n, 4, 4)
+    frames : ndarray, shape (..., n_joints, 4, 4)
+        n_joints is ``robot.chain.n_joints``: robot.n, and any mimic joints.
     T : ndarray, shape (..., 4, 4)
     """
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
-    frames = np.empty((flat.shape[0], robot.n, 4, 4))
+    n = robot.chain.n_joints
+    frames = np.empty((flat.shape[0], n, 4, 4))
     out = np.empty((flat.shape[0], 4, 4))
     k = robot.chain.kernel
     _kernels.run(_kernels.frames, _kernels.frames_parallel, flat, k.kinds, k.offsets, k.pre,
-                 k.links, frames, out)
+                 k.links, k.source, k.scale, frames, out)
     lead = q.shape[:-1]
-    return frames.reshape(lead + (robot.n, 4, 4)), out.reshape(lead + (4, 4))
+    return frames.reshape(lead + (n, 4, 4)), out.reshape(lead + (4, 4))
 
 
 def fk_frames(robot: Robot, q: ArrayLike) -> NDArray:
@@ -77,15 +80,15 @@ def fk_frames(robot: Robot, q: ArrayLike) -> NDArray:
 
     Returns
     -------
-    frames : ndarray, shape (..., n + 1, 4, 4)
+    frames : ndarray, shape (..., n_joints + 1, 4, 4)
         ``frames[..., 0]`` is ``T_base``; ``frames[..., i]`` is link frame i (for DH tables the
         DH frame of moving joint i, with any fixed rows right after it; for URDF the child link
-        of joint i); ``frames[..., n]`` is the tool pose.
+        of moving joint i, mimic joints counted); ``frames[..., -1]`` is the tool pose.
     """
     moved, T = joint_frames(robot, q)
-    lead = T.shape[:-2]
-    out = np.empty(lead + (robot.n + 1, 4, 4))
+    lead, n = T.shape[:-2], robot.chain.n_joints
+    out = np.empty(lead + (n + 1, 4, 4))
     out[..., 0, :, :] = robot.chain.T_base
-    out[..., 1:robot.n, :, :] = moved[..., :-1, :, :] @ robot.chain.kernel.after
-    out[..., robot.n, :, :] = T
+    out[..., 1:n, :, :] = moved[..., :-1, :, :] @ robot.chain.kernel.after
+    out[..., n, :, :] = T
     return out

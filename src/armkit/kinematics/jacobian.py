@@ -41,18 +41,19 @@ def streamed(compute, q: NDArray, tail: tuple[int, ...]) -> NDArray:
 def pose_and_jacobian(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     """Tool pose (..., 4, 4) and geometric Jacobian in the base frame (..., 6, n), one pass."""
     k = robot.chain.kernel
-    if (type(q) is np.ndarray and q.shape == k.offsets.shape and q.dtype == np.float64
+    if (type(q) is np.ndarray and q.shape == robot.chain.lower.shape and q.dtype == np.float64
             and q.flags.c_contiguous):
         # One configuration from Python: straight to the kernel, which checks finiteness.
         T, J = np.empty((4, 4)), np.empty((6, q.shape[0]))
-        if _kernels.pose_jacobian_one(q, k.kinds, k.offsets, k.pre, k.links, T, J):
+        if _kernels.pose_jacobian_one(q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale,
+                                      T, J):
             return T, J
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     T = np.empty((flat.shape[0], 4, 4))
     J = np.empty((flat.shape[0], 6, robot.n))
     _kernels.run(_kernels.pose_jacobians, _kernels.pose_jacobians_parallel, flat, k.kinds,
-                 k.offsets, k.pre, k.links, T, J)
+                 k.offsets, k.pre, k.links, k.source, k.scale, T, J)
     lead = q.shape[:-1]
     return T.reshape(lead + (4, 4)), J.reshape(lead + (6, robot.n))
 
@@ -156,13 +157,16 @@ def jacobian_dot(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray:
 
 
 def _jacobian_dot(robot: Robot, q: NDArray, qd: NDArray) -> NDArray:
+    chain = robot.chain
     moved, T = joint_frames(robot, q)
     z, o, p = moved[..., :3, 2], moved[..., :3, 3], T[..., :3, 3]
-    revolute = robot.chain.revolute
+    revolute = chain.kernel.kinds == 0                  # per moving joint, mimic ones included
+    if chain.coupled:
+        qd = qd @ chain.coupling.T
     w = np.zeros(q.shape[:-1] + (3,))             # angular velocity of the current link
     ref, v_ref = o[..., 0, :], np.zeros_like(w)   # a point of that link and its velocity
     dz, do = np.empty_like(z), np.empty_like(o)
-    for i in range(robot.n):
+    for i in range(chain.n_joints):
         dz[..., i, :] = np.cross(w, z[..., i, :])
         do[..., i, :] = v_ref + np.cross(w, o[..., i, :] - ref)
         rate = qd[..., i, None]
@@ -177,7 +181,8 @@ def _jacobian_dot(robot: Robot, q: NDArray, qd: NDArray) -> NDArray:
     linear = np.where(r, np.cross(dz, p[..., None, :] - o) + np.cross(z, dp[..., None, :] - do),
                       dz)
     angular = np.where(r, dz, 0.0)
-    return np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)], axis=-2)
+    Jdot = np.concatenate([np.swapaxes(linear, -1, -2), np.swapaxes(angular, -1, -2)], axis=-2)
+    return Jdot @ chain.coupling if chain.coupled else Jdot
 
 
 def tool_velocity(robot: Robot, q: ArrayLike, qd: ArrayLike) -> NDArray:

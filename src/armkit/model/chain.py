@@ -16,6 +16,7 @@ onto z, and the fixed transforms between two motions multiplied out (``pre``, ``
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Literal
@@ -80,6 +81,11 @@ class Joint:
         Fixed transforms before and after the motion; identity if omitted.
     offset : float
         Added to q before the motion (rad or m): the joint's value at q = 0.
+    leader : str, optional
+        The joint this one mimics (URDF ``<mimic>``): it has no value of its own, its q is
+        ``multiplier * q_leader + mimic_offset``; None for an independent joint.
+    multiplier, mimic_offset : float
+        The coupling to the leader (mimic_offset in rad or m).
     """
 
     name: str
@@ -89,6 +95,9 @@ class Joint:
     T_before: NDArray = field(default_factory=lambda: np.eye(4))
     T_after: NDArray = field(default_factory=lambda: np.eye(4))
     offset: float = 0.0
+    leader: str | None = None
+    multiplier: float = 1.0
+    mimic_offset: float = 0.0
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -102,6 +111,8 @@ class Joint:
         object.__setattr__(self, "T_before", frozen_array(self.T_before))
         object.__setattr__(self, "T_after", frozen_array(self.T_after))
         object.__setattr__(self, "offset", float(self.offset))
+        object.__setattr__(self, "multiplier", float(self.multiplier))
+        object.__setattr__(self, "mimic_offset", float(self.mimic_offset))
 
 
 def _rotation_onto_z(axis: NDArray) -> NDArray:
@@ -133,26 +144,41 @@ def _motion_along_z(kind: str, value: float) -> NDArray:
 class Chain:
     """A serial chain of moving joints between a base and a tool transform.
 
+    The chain's joint values q are those of its independent joints; a joint that mimics
+    another (`Joint.leader`) moves with it and has no value of its own. A leader off the chain
+    (a gripper's driven finger, when the chain ends at the other finger) moves nothing but its
+    mimic joints, and has a value in q all the same: the one a drive commands.
+
     Parameters
     ----------
     joints : sequence of Joint
+        Every moving joint, base to tool.
     T_base : array_like, shape (4, 4)
         The first joint's parent frame in the world (robot base) frame.
     T_tool : array_like, shape (4, 4)
         The tool frame in the last link's frame.
+    leaders : sequence of Joint
+        Independent joints off the chain that joints of the chain mimic (only their name,
+        kind and limits matter).
 
     Attributes
     ----------
+    variables : tuple of Joint
+        The joints whose values q (n,) holds: the chain's independent joints, and each leader
+        off the chain where its first mimic joint is.
     lower, upper : ndarray, shape (n,)
-        Position limits (rad or m).
+        Position limits (rad or m); a leader's are narrowed to keep its followers in theirs.
     velocity_limits, acceleration_limits : ndarray, shape (n,)
-        Per joint (/s, /s^2); inf where none is given.
+        Per joint (/s, /s^2); inf where none is given; narrowed for leaders as the positions.
     revolute : ndarray of bool, shape (n,)
-    screws : ndarray, shape (n, 6)
-        Each joint's space-frame screw ``(v, w)`` at q = 0 (product-of-exponentials form:
-        ``T(q) = exp([S_1] q_1) ... exp([S_n] q_n) @ T_home``); a prismatic screw is ``(w, 0)``.
-    points : ndarray, shape (n, 3)
-        A point on each joint's axis at q = 0 (base frame).
+    coupling : ndarray, shape (n_joints, n)
+        d(q of each moving joint)/dq: the identity without mimic joints.
+    screws : ndarray, shape (n_joints, 6)
+        Each moving joint's space-frame screw ``(v, w)`` at q = 0 (product-of-exponentials
+        form: ``T(q) = exp([S_1] q_1) ... exp([S_n] q_n) @ T_home``); a prismatic screw is
+        ``(w, 0)``.
+    points : ndarray, shape (n_joints, 3)
+        A point on each moving joint's axis at q = 0 (base frame).
     T_home : ndarray, shape (4, 4)
         The tool pose at q = 0.
     kernel : KernelChain
@@ -162,11 +188,14 @@ class Chain:
     joints: tuple[Joint, ...]
     T_base: NDArray = field(default_factory=lambda: np.eye(4))
     T_tool: NDArray = field(default_factory=lambda: np.eye(4))
+    leaders: tuple[Joint, ...] = ()
+    variables: tuple[Joint, ...] = field(init=False, repr=False)
     lower: NDArray = field(init=False, repr=False)
     upper: NDArray = field(init=False, repr=False)
     velocity_limits: NDArray = field(init=False, repr=False)
     acceleration_limits: NDArray = field(init=False, repr=False)
     revolute: NDArray = field(init=False, repr=False)
+    coupling: NDArray = field(init=False, repr=False)
     screws: NDArray = field(init=False, repr=False)
     points: NDArray = field(init=False, repr=False)
     T_home: NDArray = field(init=False, repr=False)
@@ -182,28 +211,45 @@ class Chain:
         set_("joints", joints)
         set_("T_base", frozen_array(self.T_base))
         set_("T_tool", frozen_array(self.T_tool))
-        set_("lower", frozen_array([j.limits.lower for j in joints]))
-        set_("upper", frozen_array([j.limits.upper for j in joints]))
-        set_("velocity_limits", frozen_array([j.limits.velocity for j in joints]))
-        set_("acceleration_limits", frozen_array([j.limits.acceleration for j in joints]))
-        revolute = np.array([j.kind == "revolute" for j in joints])
+        set_("leaders", tuple(self.leaders))
+        variables = _variables(joints, self.leaders)
+        set_("variables", variables)
+        source, scale, shift = _couplings(joints, variables)
+        limits = []
+        for v in variables:
+            followers = [j for j in joints if j.leader == v.name]
+            narrowed = leader_limits(v.limits, [(j.multiplier, j.mimic_offset, j.limits)
+                                                for j in followers])
+            if narrowed is None:
+                raise InputError(f"joint {v.name}: expected a range of motion that keeps its "
+                                 f"mimic joints ({', '.join(j.name for j in followers)}) within "
+                                 f"their limits, found none")
+            limits.append(narrowed)
+        set_("lower", frozen_array([x.lower for x in limits]))
+        set_("upper", frozen_array([x.upper for x in limits]))
+        set_("velocity_limits", frozen_array([x.velocity for x in limits]))
+        set_("acceleration_limits", frozen_array([x.acceleration for x in limits]))
+        revolute = np.array([j.kind == "revolute" for j in variables])
         revolute.setflags(write=False)
         set_("revolute", revolute)
+        coupling = np.zeros((len(joints), len(variables)))
+        coupling[np.arange(len(joints)), source] = scale
+        set_("coupling", frozen_array(coupling))
         # Kernel form: joint i rotates about / slides along z of frame pre @ ... @ links[i-1].
         align = [_rotation_onto_z(j.axis) for j in joints]
         after = [R.T @ j.T_after for R, j in zip(align, joints)]
         links = [after[i] @ joints[i + 1].T_before @ align[i + 1]
                  for i in range(len(joints) - 1)] + [after[-1] @ self.T_tool]
-        kinds = np.where(revolute, 0, 1).astype(np.int64)
-        kinds.setflags(write=False)
+        kinds = frozen_array([0 if j.kind == "revolute" else 1 for j in joints], np.int64)
         set_("kernel", KernelChain(
-            kinds=kinds, offsets=frozen_array([j.offset for j in joints]),
+            kinds=kinds, offsets=frozen_array(np.array([j.offset for j in joints]) + shift),
             pre=frozen_array(self.T_base @ joints[0].T_before @ align[0]),
-            links=frozen_array(links), after=frozen_array(np.reshape(after[:-1], (-1, 4, 4)))))
+            links=frozen_array(links), after=frozen_array(np.reshape(after[:-1], (-1, 4, 4))),
+            source=frozen_array(source, np.int64), scale=frozen_array(scale)))
         # Screws at home: walk the kernel form at q = 0 (each joint at its offset).
         T, screws, points = self.kernel.pre, [], []
-        for j, link in zip(joints, self.kernel.links):
-            T = T @ _motion_along_z(j.kind, j.offset)
+        for j, offset, link in zip(joints, self.kernel.offsets, self.kernel.links):
+            T = T @ _motion_along_z(j.kind, offset)
             w, r = T[:3, 2], T[:3, 3]
             screws.append(np.r_[-np.cross(w, r), w] if j.kind == "revolute" else np.r_[w, 0, 0, 0])
             points.append(r)
@@ -214,13 +260,33 @@ class Chain:
 
     @property
     def n(self) -> int:
-        """Number of moving joints."""
+        """Number of joint values: the independent moving joints."""
+        return len(self.variables)
+
+    @property
+    def n_joints(self) -> int:
+        """Number of moving joints, mimic joints included: the link frames are n_joints + 1."""
         return len(self.joints)
 
     @property
+    def coupled(self) -> bool:
+        """Whether some joint mimics another."""
+        return any(j.leader is not None for j in self.joints)
+
+    @property
     def names(self) -> tuple[str, ...]:
-        """Joint names, in chain order."""
-        return tuple(j.name for j in self.joints)
+        """The names of the joint values, in chain order."""
+        return tuple(j.name for j in self.variables)
+
+    @cached_property
+    def wraps(self) -> NDArray:
+        """(n,) bool: the revolute joint values whose range spans a full turn, where q and
+        q + 2 pi are the same pose (their mimic joints, if any, move by whole turns too)."""
+        whole = np.ones(self.n, dtype=bool)
+        for j, source, scale in zip(self.joints, self.kernel.source, self.kernel.scale):
+            whole[source] &= j.leader is None or (j.kind == "revolute" and scale == round(scale))
+        return frozen_array(self.revolute & whole & (self.upper - self.lower >= 2 * np.pi - 1e-12),
+                            bool)
 
     @cached_property
     def sampling_limits(self) -> tuple[NDArray, NDArray]:
@@ -237,13 +303,88 @@ class Chain:
         return frozen_array(lower), frozen_array(upper)
 
 
+def _variables(joints: tuple[Joint, ...], leaders: tuple[Joint, ...]) -> tuple[Joint, ...]:
+    """The joints q holds values of: independent ones in chain order, a leader off the chain
+    where its first mimic joint is."""
+    off_chain = {j.name: j for j in leaders}
+    variables, placed = [], set()
+    for j in joints:
+        joint = j if j.leader is None else off_chain.get(j.leader)
+        if joint is not None and joint.name not in placed:
+            variables.append(joint)
+            placed.add(joint.name)
+    unused = [name for name in off_chain if name not in placed]
+    if unused or any(j.leader is not None for j in leaders):
+        raise InputError(f"chain leaders: expected independent joints that joints of the chain "
+                         f"mimic, found {', '.join(j.name for j in leaders)}")
+    return tuple(variables)
+
+
+def _couplings(joints: tuple[Joint, ...], variables: tuple[Joint, ...]):
+    """For each moving joint, the index of the value that drives it, the factor and the
+    constant: its q is ``scale * q[source] + shift``."""
+    index = {j.name: i for i, j in enumerate(variables)}
+    names = [j.name for j in joints] + [j.name for j in variables if j not in joints]
+    if len(set(names)) != len(names):
+        raise InputError(f"chain: expected unique joint names, found {names}")
+    source, scale, shift = [], [], []
+    for j in joints:
+        if j.leader is None:
+            source.append(index[j.name]), scale.append(1.0), shift.append(0.0)
+            continue
+        if j.leader not in index:
+            what = "a mimic joint itself" if j.leader in names else "neither on the chain nor a leader"
+            raise InputError(f"joint {j.name}: expected to mimic an independent joint "
+                             f"({', '.join(index)}), found {j.leader!r} ({what})")
+        leader = variables[index[j.leader]]
+        if leader.kind != j.kind:
+            raise InputError(f"joint {j.name}: expected a leader of its own kind ({j.kind}), "
+                             f"found {j.leader!r}, {leader.kind}")
+        if not (math.isfinite(j.multiplier) and math.isfinite(j.mimic_offset)):
+            raise InputError(f"joint {j.name}: expected a finite mimic multiplier and offset, "
+                             f"found {j.multiplier} and {j.mimic_offset}")
+        source.append(index[j.leader]), scale.append(j.multiplier), shift.append(j.mimic_offset)
+    return np.array(source), np.array(scale), np.array(shift)
+
+
+def leader_limits(limits: Limits, couplings) -> Limits | None:
+    """A leader's limits narrowed so that each of its mimic joints stays within its own.
+
+    Parameters
+    ----------
+    limits : Limits
+        The leader's own.
+    couplings : iterable of (multiplier, offset, Limits)
+        Each mimic joint's coupling (its value is ``multiplier * leader + offset``) and limits.
+
+    Returns
+    -------
+    Limits, or None if no leader value keeps every mimic joint within its limits.
+    """
+    lower, upper = limits.lower, limits.upper
+    velocity, acceleration = limits.velocity, limits.acceleration
+    for m, b, own in couplings:
+        if m == 0.0:
+            if not own.lower <= b <= own.upper:
+                return None
+            continue
+        ends = sorted(((own.lower - b) / m, (own.upper - b) / m))
+        lower, upper = max(lower, ends[0]), min(upper, ends[1])
+        velocity = min(velocity, own.velocity / abs(m))
+        acceleration = min(acceleration, own.acceleration / abs(m))
+    return Limits(lower, upper, velocity, acceleration) if lower < upper else None
+
+
 @dataclass(frozen=True, eq=False)
 class KernelChain:
     """The chain as the numba kernels take it (all axes on z).
 
-    kinds (n,) int: 0 revolute, 1 prismatic; offsets (n,); pre (4, 4): base up to joint 1's
-    motion; links (n, 4, 4): from joint i's motion to joint i+1's (the last ends at the tool);
-    after (n - 1, 4, 4): from joint i's motion to link frame i (the last link frame is the tool).
+    Per moving joint i (n_joints of them, mimic joints included): kinds (n_joints,) int,
+    0 revolute, 1 prismatic; the joint moves by ``scale[i] * q[source[i]] + offsets[i]``
+    (source int, scale and offsets float, (n_joints,) each); pre (4, 4): base up to joint 1's
+    motion; links (n_joints, 4, 4): from joint i's motion to joint i+1's (the last ends at the
+    tool); after (n_joints - 1, 4, 4): from joint i's motion to link frame i (the last link
+    frame is the tool).
     """
 
     kinds: NDArray
@@ -251,3 +392,5 @@ class KernelChain:
     pre: NDArray
     links: NDArray
     after: NDArray
+    source: NDArray
+    scale: NDArray

@@ -84,7 +84,7 @@ class Robot:
 
     @property
     def n(self) -> int:
-        """Number of moving joints."""
+        """Number of joint values q holds: the independent moving joints (not mimic ones)."""
         return self.chain.n
 
     @property

@@ -12,8 +12,13 @@ joints of the chain are checked in full: every number an ASCII decimal, finite a
 sane range, limits ordered, velocity limits positive. Joints off the chain play no part in the
 model and their numbers are not read, so a file whose gripper or legs use conventions of their
 own (``velocity="0"``, ``floating``, ``planar`` and ``<mimic>`` joints) still gives its arm. On
-the chain, floating, planar and mimic joints are refused: the chain's joints are independent
-(a mimic joint's value is ``multiplier * leader + offset``, which the chain cannot hold).
+the chain, floating and planar joints are refused. A mimic joint on the chain moves with its
+leader (its value is ``multiplier * leader + offset``, as URDF defines it) and has no value of
+its own in q; its leader is an independent joint of the same kind, and has the value in q
+(where the leader is off the chain, as a gripper's driven finger is for a chain that ends at
+the other finger, in place of its first mimic joint). The leader's limits are narrowed to keep
+its mimic joints within their own. A mimic joint's velocity limit of 0, which gripper files
+often give, means it has none of its own (its leader's applies).
 Meshes (``package://`` or file paths in ``<visual>`` and ``<collision>``) play no part in the
 kinematics and are not read.
 
@@ -22,9 +27,10 @@ hanging on them through fixed joints, merged as the kinematics merges them) are 
 arm's collision geometry (`armkit.planning.arm_geometry`): boxes, cylinders and spheres with
 their ``<origin>``, each number checked as the joints' are; a ``<mesh>`` is kept as a mesh
 without reading its file. The ``<collision>`` elements of links moved by joints off the chain
-(a gripper's fingers, another arm) are not read: those links are not part of this arm. A ``.xacro`` file is expanded by the ``xacro`` package
-(``pip install "armkit[xacro]"``); xacro evaluates the file's expressions, so expand only files
-you trust.
+(a gripper's fingers, another arm) are not read: those links are not part of this arm.
+
+A ``.xacro`` file is expanded by the ``xacro`` package (``pip install "armkit[xacro]"``); xacro
+evaluates the file's expressions, so expand only files you trust.
 """
 
 from __future__ import annotations
@@ -39,7 +45,7 @@ from numpy.typing import NDArray
 
 from armkit.errors import ModelFileError
 from armkit.io.documents import found_text, read_bytes
-from armkit.model.chain import Chain, Joint, Limits, freeze
+from armkit.model.chain import Chain, Joint, Limits, freeze, leader_limits
 from armkit.spatial import pose_from_xyz_rpy
 
 SUPPORTED = ("revolute", "continuous", "prismatic", "fixed")
@@ -79,6 +85,8 @@ class URDFJoint:
     rpy: NDArray
     axis: NDArray
     limits: Limits | None
+    mimic: tuple[str, float, float] | None = None
+    """(leader, multiplier, offset) of a mimic joint."""
 
 
 COLLISION_KINDS = ("box", "cylinder", "sphere", "mesh")
@@ -132,6 +140,8 @@ class URDFTable:
     joints: tuple[URDFJoint, ...]
     T_base: NDArray = field(default_factory=lambda: np.eye(4))
     T_tool: NDArray = field(default_factory=lambda: np.eye(4))
+    leaders: tuple[URDFJoint, ...] = ()
+    """Joints off the chain that mimic joints of the chain follow."""
     collisions: tuple[URDFCollision, ...] = ()
     detached: tuple[str, ...] = ()
 
@@ -174,8 +184,12 @@ def _limits(element: ET.Element, kind: str, path: str, where: str) -> Limits | N
     if limit is not None and limit.get("velocity") is not None:
         velocity = float(_numbers(limit.get("velocity"), 1, path, f"{where} <limit> velocity",
                                   MAX_RATE)[0])
-        if not velocity > 0:
-            raise ModelFileError(path, f"{where} <limit> velocity", "a positive number",
+        mimic = element.find("mimic") is not None
+        if velocity == 0 and mimic:
+            velocity = np.inf           # gripper files' mimic joints: the leader's limit rules
+        elif not velocity > 0:
+            raise ModelFileError(path, f"{where} <limit> velocity", "a positive number"
+                                 + (" (or 0 on a mimic joint)" if mimic else ""),
                                  found_text(limit.get("velocity")))
     if kind == "continuous":
         return Limits(-np.inf, np.inf, velocity)
@@ -219,7 +233,7 @@ class _Element:
     kind: str
     parent: str
     child: str
-    mimic: str | None
+    mimic: ET.Element | None
 
 
 def _read_structure(element: ET.Element, links: set[str], path: str) -> _Element:
@@ -241,9 +255,7 @@ def _read_structure(element: ET.Element, links: set[str], path: str) -> _Element
             raise ModelFileError(path, f"{where} <{end}>", "a link declared in the file",
                                  f"link {found_text(link)}, which no <link> declares")
         ends[end] = link
-    mimic = element.find("mimic")
-    return _Element(element, name, kind, ends["parent"], ends["child"],
-                    None if mimic is None else (mimic.get("joint") or "?"))
+    return _Element(element, name, kind, ends["parent"], ends["child"], element.find("mimic"))
 
 
 def _read_joint(item: _Element, path: str) -> URDFJoint:
@@ -261,7 +273,22 @@ def _read_joint(item: _Element, path: str) -> URDFJoint:
                                 MAX_LENGTH),
                      _attribute(origin, "rpy", "0 0 0", 3, path, f"{where} <origin>",
                                 MAX_ANGLE),
-                     axis, _limits(element, kind, path, where))
+                     axis, _limits(element, kind, path, where),
+                     None if item.mimic is None else _mimic(item, path))
+
+
+def _mimic(item: _Element, path: str) -> tuple[str, float, float]:
+    """A mimic joint's (leader, multiplier, offset)."""
+    mimic, where = item.mimic, f"joint {found_text(item.name)} <mimic>"
+    if item.kind == "fixed":
+        raise ModelFileError(path, where, "a mimic on a moving joint", "a fixed joint")
+    leader = mimic.get("joint")
+    if not leader:
+        raise ModelFileError(path, f"{where} joint", "the name of the joint it mimics", "none")
+    bound = MAX_ANGLE if item.kind in ("revolute", "continuous") else MAX_LENGTH
+    multiplier = _attribute(mimic, "multiplier", "1", 1, path, where, MAX_AXIS)[0]
+    offset = _attribute(mimic, "offset", "0", 1, path, where, bound)[0]
+    return leader, float(multiplier), float(offset)
 
 
 def _parse(path: str) -> ET.Element:
@@ -299,7 +326,8 @@ def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
         The file is not URDF; a joint or link is malformed, unnamed or named twice; a joint
         names a link the file does not declare; a link has two parents; the joints form a
         loop; the tree has several roots, or several tips and none is named (the message lists
-        them); the chain holds a mimic, floating or planar joint.
+        them); the chain holds a floating or planar joint, or a mimic joint whose leader is
+        not an independent moving joint of its own kind.
     """
     path = str(path)
     root = _parse(path)
@@ -349,10 +377,6 @@ def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
     while link in parent_joint:
         item = parent_joint[link]
         where = f"joint {found_text(item.name)}"
-        if item.mimic is not None:
-            raise ModelFileError(path, f"{where} <mimic>", "independent joints on the chain "
-                                 f"to {found_text(tip)} (a mimic joint off the chain is ignored)",
-                                 f"a mimic of joint {found_text(item.mimic)}")
         if item.kind in ELSEWHERE_ONLY:
             raise ModelFileError(path, f"{where} type", "revolute, continuous, prismatic or "
                                  f"fixed on the chain to {found_text(tip)}",
@@ -361,7 +385,47 @@ def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
         link = item.parent
     chain.reverse()
     collisions, detached = _read_collisions(root, roots[0], chain, parent_joint, path)
-    return URDFTable(path, tip, tuple(chain), collisions=collisions, detached=detached)
+    return URDFTable(path, tip, tuple(chain), leaders=_leaders(chain, read, path),
+                     collisions=collisions, detached=detached)
+
+
+def _leaders(chain: list[URDFJoint], read: dict[str, _Element], path: str
+             ) -> tuple[URDFJoint, ...]:
+    """The leaders off the chain of the chain's mimic joints, read; refuses a leader that is
+    not an independent moving joint of the mimic's kind (revolute and continuous are one), or
+    whose range cannot keep its mimic joints within their limits."""
+    known = {j.name: j for j in chain}
+    rotates = ("revolute", "continuous")
+    off_chain = []
+    for j in chain:
+        if j.mimic is None:
+            continue
+        name, where = j.mimic[0], f"joint {found_text(j.name)} <mimic> joint"
+        if name not in known:
+            if name not in read:
+                raise ModelFileError(path, where, "the name of a joint of the file",
+                                     found_text(name))
+            if read[name].kind in SUPPORTED[:3]:
+                known[name] = _read_joint(read[name], path)
+                off_chain.append(known[name])
+        leader = known.get(name)
+        if leader is None or leader.mimic is not None or leader.kind == "fixed":
+            kind = read[name].kind if leader is None else (
+                "mimic" if leader.mimic is not None else "fixed")
+            raise ModelFileError(path, where, "an independent moving joint",
+                                 f"{found_text(name)}, a {kind} joint")
+        if (j.kind in rotates) != (leader.kind in rotates):
+            raise ModelFileError(path, where, f"a joint of its own kind ({j.kind})",
+                                 f"{found_text(name)}, {leader.kind}")
+    for leader in list(chain) + off_chain:
+        followers = [j for j in chain if j.mimic is not None and j.mimic[0] == leader.name]
+        if followers and leader_limits(leader.limits, [(j.mimic[1], j.mimic[2], j.limits)
+                                                       for j in followers]) is None:
+            raise ModelFileError(path, f"joint {found_text(leader.name)} <limit>",
+                                 "a range in which its mimic joints "
+                                 f"({_names(j.name for j in followers)}) stay within their "
+                                 "limits", "none")
+    return tuple(off_chain)
 
 
 def _positive(element: ET.Element, attribute: str, count: int, path: str,
@@ -434,9 +498,12 @@ def _read_collisions(root: ET.Element, root_link: str, chain: list[URDFJoint],
             item = parent_joint[name]           # every link but the root has one (a tree)
             if item.kind != "fixed":
                 break
-            if item.name not in origins:
-                joint = _read_joint(item, path)
-                origins[item.name] = pose_from_xyz_rpy(joint.xyz, joint.rpy)
+            if item.name not in origins:      # only its origin matters (checked as on the chain)
+                where = f"joint {found_text(item.name)} <origin>"
+                origin = item.element.find("origin")
+                origins[item.name] = pose_from_xyz_rpy(
+                    _attribute(origin, "xyz", "0 0 0", 3, path, where, MAX_LENGTH),
+                    _attribute(origin, "rpy", "0 0 0", 3, path, where, MAX_ANGLE))
             T = origins[item.name] @ T
             name = item.parent
         if name not in anchors:
@@ -483,8 +550,12 @@ def chain_from_urdf(table: URDFTable) -> Chain:
             pending = pending @ origin
             continue
         kind = "prismatic" if j.kind == "prismatic" else "revolute"
-        joints.append(Joint(j.name, kind, j.axis, j.limits, T_before=pending @ origin))
+        leader, multiplier, offset = j.mimic if j.mimic is not None else (None, 1.0, 0.0)
+        joints.append(Joint(j.name, kind, j.axis, j.limits, T_before=pending @ origin,
+                            leader=leader, multiplier=multiplier, mimic_offset=offset))
         pending = np.eye(4)
     if not joints:
         raise ModelFileError(table.path, "tip", "a chain with a moving joint", "only fixed joints")
-    return Chain(joints, table.T_base, pending @ table.T_tool)
+    leaders = [Joint(j.name, "prismatic" if j.kind == "prismatic" else "revolute", j.axis,
+                     j.limits) for j in table.leaders]
+    return Chain(joints, table.T_base, pending @ table.T_tool, leaders)

@@ -102,12 +102,12 @@ def link_to_body(robot: Robot) -> NDArray:
     """For each link 0..n, the transform (4, 4) taking points from the link frame to the frame
     the kernels move it with: identity for link 0 (the base frame), for link i joint i's frame
     after its motion (z on its axis)."""
-    k = robot.chain.kernel
-    out = np.empty((robot.n + 1, 4, 4))
+    k, n = robot.chain.kernel, robot.chain.n_joints
+    out = np.empty((n + 1, 4, 4))
     out[0] = np.eye(4)
-    for i in range(robot.n - 1):
+    for i in range(n - 1):
         out[i + 1] = k.after[i]
-    out[robot.n] = k.links[robot.n - 1]
+    out[n] = k.links[n - 1]
     return out
 
 
@@ -126,15 +126,16 @@ def default_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
     first = np.linalg.inv(T_base) @ k.pre[:, 3]
     if np.linalg.norm(first[:3]) > 1e-9:
         links.append(0), A.append(np.zeros(3)), B.append(first[:3])
-    for i in range(robot.n):
+    for i in range(robot.chain.n_joints):
         # Segment from joint i's origin to joint i+1's, rigid in joint i's moved frame.
         a_body, b_body = np.array([0.0, 0, 0, 1]), k.links[i][:, 3]
         links.append(i + 1)
         A.append((to_link[i + 1] @ a_body)[:3])
         B.append((to_link[i + 1] @ b_body)[:3])
-    labels = ([] if len(links) == robot.n else ["default: base to joint 1"]) + \
-        [f"default: joint {i + 1} to {'the tool' if i + 1 == robot.n else f'joint {i + 2}'}"
-         for i in range(robot.n)]
+    n = robot.chain.n_joints
+    labels = ([] if len(links) == n else ["default: base to joint 1"]) + \
+        [f"default: joint {i + 1} to {'the tool' if i + 1 == n else f'joint {i + 2}'}"
+         for i in range(n)]
     geometry = ArmGeometry(links, A, B, np.full(len(links), float(radius)), skip,
                            "default: segments between joint origins", labels)
     return _skip_touching(robot, geometry)
@@ -209,7 +210,7 @@ def urdf_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
         if c.kind == "mesh":
             continue
         a, b, r = primitive_capsule(c.kind, c.size)
-        T = (to_tool if c.chain_link == robot.n else np.eye(4)) @ c.T
+        T = (to_tool if c.chain_link == robot.chain.n_joints else np.eye(4)) @ c.T
         links.append(c.chain_link)
         A.append(T[:3, :3] @ a + T[:3, 3])
         B.append(T[:3, :3] @ b + T[:3, 3])

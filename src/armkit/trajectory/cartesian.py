@@ -158,7 +158,7 @@ def cartesian_line(robot: Robot, T_start: ArrayLike, T_goal: ArrayLike, q0: Arra
             reason = whole.reason
         else:
             chain = robot.chain
-            turn = chain.revolute & (chain.upper - chain.lower >= 2 * np.pi - 1e-12)
+            turn = chain.wraps
             at_limit = np.any(~turn & ((last <= chain.lower + 1e-9)
                                        | (last >= chain.upper - 1e-9)))
             reason = OUTSIDE_JOINT_LIMITS if at_limit else SINGULAR

@@ -347,8 +347,11 @@ def _rotation_flags(k: int, pointing: bool) -> tuple[int, ...]:
 def family_of(chain: Chain) -> Family | None:
     """The closed-form family of a chain, or None (then only the numeric solvers apply).
 
-    `armkit.kinematics.ik.IKSolver` asks once and keeps the answer.
+    `armkit.kinematics.ik.IKSolver` asks once and keeps the answer. A chain with mimic joints
+    has none.
     """
+    if chain.coupled:
+        return None
     w, r = _axes(chain)
     n, rev = chain.n, chain.revolute
     meet = lambda i, j: (not _parallel(w[i], w[j])                   # noqa: E731

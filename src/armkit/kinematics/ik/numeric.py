@@ -26,7 +26,7 @@ the best point found gets one last run of ten times ``max_iter`` (near a singula
 convergence is slow, not absent).
 
 The kernels take their arguments in groups (plain tuples, see `KernelArgs`):
-``chain = (kinds, offsets, pre, links)``, ``limits = (lower, upper, turn, sample_lo,
+``chain = (kinds, offsets, pre, links, source, scale)`` (`KernelChain`), ``limits = (lower, upper, turn, sample_lo,
 sample_hi)``, ``task = (mask, rows, tol_position, tol_rotation)`` and
 ``budget = (max_iter, restarts, method, seed)``.
 """
@@ -34,7 +34,6 @@ sample_hi)``, ``task = (mask, rows, tol_position, tol_rotation)`` and
 from __future__ import annotations
 
 import math
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -43,6 +42,7 @@ import numpy as np
 
 from armkit.kinematics._kernels import pose_jacobian_one
 from armkit.kinematics.ik.task import task_errors_one, task_residual
+from armkit.threads import threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
@@ -55,20 +55,13 @@ STALL_AFTER, STALL_WINDOW, STALL_FACTOR = 6, 3, 0.25
 TARGETS_PER_THREAD = 256    # below this many targets per thread, threads cost more than they save
 
 
-def available_threads() -> int:
-    """CPU cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                              # not on Linux
-        return os.cpu_count() or 1
-
-
 def thread_count(targets: int, threads: int | None = None) -> int:
-    """Threads for a batch of `targets`: at most `threads` (default: the cores this process
-    may use), and one per `TARGETS_PER_THREAD` targets, so a small batch runs on the calling
-    thread and pays no start-up."""
-    limit = available_threads() if threads is None else threads
-    return max(1, min(limit, targets // TARGETS_PER_THREAD))
+    """Threads for a batch of `targets`: one per `TARGETS_PER_THREAD` targets, at most
+    `threads` (default: `armkit.threads`' choice, the idle cores or the bound the user set),
+    so a small batch, or one on a busy machine, runs on the calling thread."""
+    if threads is None:
+        return threads_for(targets, TARGETS_PER_THREAD)
+    return max(1, min(threads, targets // TARGETS_PER_THREAD))
 
 
 # --- kernels ----------------------------------------------------------------------------------
@@ -197,7 +190,7 @@ def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacob
     the loop, the held-joint step is the second pass of one loop): the compiled code inlines
     every call, so each call site costs compile time.
     """
-    kinds, offsets, pre, links = chain
+    kinds, offsets, pre, links, source, scale = chain
     lower, upper, turn = limits[0], limits[1], limits[2]
     mask, rows, tol_p, tol_r = task
     n = q.shape[0]
@@ -213,7 +206,7 @@ def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacob
     cost, size, first, evaluate = np.inf, np.inf, True, True
     for it in range(iterations + 1):
         if evaluate:                                    # the trial point q_try
-            pose_jacobian_one(q_try, kinds, offsets, pre, links, T2, J2)
+            pose_jacobian_one(q_try, kinds, offsets, pre, links, source, scale, T2, J2)
             new_cost = task_residual(T2, J2, Tt, mask, rows, e2, A2, E, w)
             if first or method == NEWTON or new_cost < cost:
                 for j in range(n):
@@ -358,7 +351,7 @@ def _writable(a, dtype=float) -> np.ndarray:
 class KernelArgs:
     """A robot's arrays as the numeric kernels take them, built once per solver.
 
-    chain: (kinds, offsets, pre, links); limits: (lower, upper, turn, sample_lo, sample_hi),
+    chain: (kinds, offsets, pre, links, source, scale); limits: (lower, upper, turn, sample_lo, sample_hi),
     where turn marks revolute joints whose range is a full turn or more (they wrap instead of
     stopping) and the sample range is `Chain.sampling_limits`.
     """
@@ -370,10 +363,11 @@ class KernelArgs:
     def of(cls, robot) -> "KernelArgs":
         chain, k = robot.chain, robot.chain.kernel
         lower, upper = chain.lower, chain.upper
-        turn = chain.revolute & (upper - lower >= 2 * np.pi - 1e-12)
+        turn = chain.wraps
         lower_w = np.where(turn & ~np.isfinite(lower), -np.pi, lower)
         sample_lo, sample_hi = chain.sampling_limits
-        return cls(tuple(_read_only(a) for a in (k.kinds, k.offsets, k.pre, k.links)),
+        return cls(tuple(_read_only(a) for a in (k.kinds, k.offsets, k.pre, k.links,
+                                                  k.source, k.scale)),
                    tuple(_read_only(a) for a in (lower_w, upper, turn, sample_lo, sample_hi)))
 
 

@@ -228,8 +228,9 @@ class IKSolver:
     seed : int
         Seed of the bank's samples.
     threads : int, optional
-        Most threads a batch may use (default: the cores this process may run on); a batch
-        uses one thread per 256 targets at most, so small batches stay on the calling thread.
+        Most threads a batch may use (default: `armkit.threads`' choice, the idle cores or the
+        bound set by `armkit.set_num_threads`); a batch uses one thread per 256 targets at
+        most, so small batches stay on the calling thread.
 
     Attributes
     ----------
@@ -535,7 +536,7 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        _kernels.poses(flat, k.kinds, k.offsets, k.pre, k.links, out)
+        _kernels.poses(flat, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:
