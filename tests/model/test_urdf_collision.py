@@ -116,3 +116,20 @@ def test_yaml_wrapper_keeps_the_collisions(arm, tmp_path):
                        f"urdf: {arm.name}\ntip: {TIP}\ntool: {{xyz: [0, 0, 100]}}\n")
     robot = armkit.robot(str(wrapper))
     assert len(robot.table.collisions) == 5 and robot.table.detached == ("finger",)
+
+
+def test_yaml_wrapper_keeps_a_mimic_joints_leader(tmp_path):
+    """The wrapper keeps all the URDF gives (here the leader off the chain of a mimic joint)."""
+    from tests.model.test_real_urdfs import robot_file
+
+    wrapper = tmp_path / "panda.yaml"
+    wrapper.write_text("name: p\nunits: {length: mm, angle: deg}\nconvention: urdf\n"
+                       f"urdf: {robot_file('panda_description/urdf/panda.urdf')}\n"
+                       "tip: panda_rightfinger\ntool: {xyz: [0, 0, 10]}\n")
+    robot = armkit.robot(str(wrapper))
+    direct = armkit.load_robot(robot_file("panda_description/urdf/panda.urdf"),
+                               tip="panda_rightfinger")
+    assert robot.joint_names == direct.joint_names and robot.n == 8
+    q = np.full(8, 0.01)
+    expected = armkit.fk(direct, q) @ pose_from_xyz_rpy([0, 0, 0.01], [0, 0, 0])
+    np.testing.assert_allclose(armkit.fk(robot, q), expected, atol=1e-15)
