@@ -10,6 +10,9 @@ Scenes (inspection_6dof, one capsule per link between consecutive DH frame origi
 - window: a wall at x = 600-640 mm with a 340 x 340 mm window; the tool starts low beside the
   wall and must reach through the window to x = 950 mm (a narrow passage: RRT-Connect needs
   hundreds of iterations).
+- bookshelf: a UR5 (armkit's built-in ur5, default capsules of 40 mm) among a bookshelf like
+  MotionBenchMaker's (examples/bookshelf.scene.yaml: three plates, side walls, a back, four
+  cylinders); tool from the lower compartment to the upper one (`--bookshelf-only` runs it alone).
 
 armkit certifies at r = 5 mm (every configuration on a returned path keeps r / 2 from the
 obstacles). OMPL checks states with the same verdict (free distance > r) at two resolutions:
@@ -270,15 +273,66 @@ def report(name, rows):
           f"{np.median(a[ok, 5]) * 1e3:.3g} | {int(a[ok, 6].sum())} |")
 
 
+BOOKSHELF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples",
+                         "bookshelf.scene.yaml")
+
+
+def scene_table(name, checker, start, goal, seeds, args) -> None:
+    """The planners' table for one scene: armkit's three planners, OMPL's at the coarse and the
+    safe resolution (the joint step keeping every point of the arm within r between checks)."""
+    robot = checker.robot
+    extent = float(np.linalg.norm(robot.upper - robot.lower))
+    safe = R / np.linalg.norm(checker.weights) / extent
+    plan(checker, start, goal, seed=0)                           # compiled before timing
+    print(f"\n## {name}: {len(seeds)} seeds; times in ms; lengths joint-space rad")
+    print("| planner | success | median | p90 | states checked | length | shortcut length |"
+          " shortcut ms | dense fails |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for planner in ("rrtconnect", "rrt", "rrtstar"):
+        report(f"armkit {planner} (certified, r = 5 mm)",
+               ours(checker, start, goal, planner, seeds))
+    report("OMPL RRTConnect, coarse (1 %)",
+           ompl_runs(checker, start, goal, "rrtconnect", seeds, None, 10.0))
+    if not args.no_ompl_safe:
+        report(f"OMPL RRTConnect, safe ({safe:.2g}), 10 s",
+               ompl_runs(checker, start, goal, "rrtconnect", seeds, safe, 10.0))
+    report("OMPL RRT, coarse (1 %), 2 s", ompl_runs(checker, start, goal, "rrt", seeds,
+                                                    None, 2.0))
+    report("OMPL RRTstar, coarse (1 %), 1 s", ompl_runs(checker, start, goal, "rrtstar",
+                                                       seeds, None, 1.0))
+
+
+def bookshelf_table(seeds, args) -> None:
+    """The UR5 among the bookshelf of examples/bookshelf.scene.yaml (its start and goal)."""
+    from armkit.io.scene import read_planning_problem
+    from armkit.planning import arm_geometry
+
+    problem = read_planning_problem(BOOKSHELF)
+    robot = problem.robot
+    checker = CollisionChecker(robot, problem.scene, arm_geometry(robot, problem.radius), R)
+    start, goal = problem.start, problem.goal[0]
+    line = start + np.linspace(0, 1, 10_001)[:, None] * (goal - start)
+    print(f"\nbookshelf: {robot.name}, {len(problem.scene)} obstacles; "
+          f"{100 * np.mean(checker.clearance(line) <= 0):.0f} % of the straight joint line "
+          f"collides")
+    scene_table("bookshelf (UR5)", checker, start, goal, seeds, args)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="10 seeds, fewer rounds")
     parser.add_argument("--seeds", type=int, default=None, help="seeds per planner (100)")
     parser.add_argument("--no-ompl-safe", action="store_true",
                         help="skip OMPL at the safe resolution (slow)")
+    parser.add_argument("--bookshelf-only", action="store_true",
+                        help="only the UR5 bookshelf scene")
     args = parser.parse_args()
     seeds = range(args.seeds or (10 if args.quick else 100))
     print(f"load average at start: {os.getloadavg()}")
+    if args.bookshelf_only:
+        bookshelf_table(seeds, args)
+        print(f"\nload average at end: {os.getloadavg()}")
+        return
     robot = armkit.robot("inspection_6dof")
     geometry = default_geometry(robot, 0.04)
     print(first_call_compile())
@@ -307,6 +361,7 @@ def main() -> None:
                                                         None, 2.0))
         report("OMPL RRTstar, coarse (1 %), 1 s", ompl_runs(checker, start, goal, "rrtstar",
                                                            seeds, None, 1.0))
+    bookshelf_table(seeds, args)
     print(f"\nload average at end: {os.getloadavg()}")
 
 

@@ -85,6 +85,7 @@ def test_show_lists_the_geometry():
     assert run.returncode == 0, run.stderr
     doc = json.loads(run.stdout)["collision"]
     assert doc["source"].startswith("default") and len(doc["capsules"]) == 6
-    assert doc["capsules"][5] == {"link": 6, "a": [0, 0, -500], "b": [0, 0, 0], "radius": 40}
+    assert doc["capsules"][5] == {"link": 6, "a": [0, 0, -500], "b": [0, 0, 0], "radius": 40,
+                                  "from": "default: joint 6 to the tool"}
     assert [3, 5] in doc["skip"]
     assert Scene() is not None and armkit.robot("inspection_6dof").n == 6

@@ -113,11 +113,14 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
         table.add_row(row["frame"], _cell(row["position"]), _cell(row["rpy"]))
     stdout.print(table)
     table = Table("link", f"a ({units.length})", f"b ({units.length})",
-                  f"radius ({units.length})", box=None, title_justify="left",
+                  f"radius ({units.length})", "from", box=None, title_justify="left",
                   title=f"collision capsules in link frames ({collision['source']})")
     for c in collision["capsules"]:
-        table.add_row(str(c["link"]), _cell(c["a"]), _cell(c["b"]), _cell(c["radius"]))
+        table.add_row(str(c["link"]), _cell(c["a"]), _cell(c["b"]), _cell(c["radius"]),
+                      c["from"])
     stdout.print(table)
+    for note in collision["notes"]:
+        stdout.print(f"note: {note}")
     stdout.print("self-collision skipped between links: "
                  + (", ".join(f"{i}-{j}" for i, j in collision["skip"]) or "none")
                  + " (and between adjacent links)")
@@ -129,10 +132,11 @@ def _collision_view(model: Robot, units: Units) -> dict:
 
     g = arm_geometry(model)
     length = lambda x: units.length_from_si(np.round(x, 12) + 0.0)   # noqa: E731  (no -0, 1e-15)
-    return {"source": g.source, "skip": [list(p) for p in g.skip],
+    labels = g.labels or ("",) * len(g)
+    return {"source": g.source, "skip": [list(p) for p in g.skip], "notes": list(g.notes),
             "capsules": [{"link": int(k), "a": length(a), "b": length(b),
-                          "radius": float(length(r))}
-                         for k, a, b, r in zip(g.link, g.a, g.b, g.radius)]}
+                          "radius": float(length(r)), "from": label}
+                         for k, a, b, r, label in zip(g.link, g.a, g.b, g.radius, labels)]}
 
 
 def _cell(value) -> str:

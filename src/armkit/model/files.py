@@ -18,6 +18,7 @@ what was found.
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import os
@@ -189,7 +190,7 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
             raise ModelFileError(path, "urdf", "a URDF file (its path relative to this file)",
                                  f"{found_text(spec.urdf)}, which is not a file")
         found = read_urdf(urdf, spec.tip)
-        table = URDFTable(found.path, found.tip, found.joints, T_base, T_tool)
+        table = dataclasses.replace(found, T_base=T_base, T_tool=T_tool)
         chain = chain_from_urdf(table)
     elif isinstance(spec, ScrewFile):
         rows = tuple(_screw_row(j, i, units) for i, j in enumerate(spec.joints))

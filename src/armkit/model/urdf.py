@@ -20,9 +20,17 @@ the other finger, in place of its first mimic joint). The leader's limits are na
 its mimic joints within their own. A mimic joint's velocity limit of 0, which gripper files
 often give, means it has none of its own (its leader's applies).
 Meshes (``package://`` or file paths in ``<visual>`` and ``<collision>``) play no part in the
-kinematics and are not read. A ``.xacro`` file is expanded by the ``xacro`` package
-(``pip install "armkit[xacro]"``); xacro evaluates the file's expressions, so expand only files
-you trust.
+kinematics and are not read.
+
+The ``<collision>`` elements of the links rigidly attached to the chain (its links, and the links
+hanging on them through fixed joints, merged as the kinematics merges them) are read for the
+arm's collision geometry (`armkit.planning.arm_geometry`): boxes, cylinders and spheres with
+their ``<origin>``, each number checked as the joints' are; a ``<mesh>`` is kept as a mesh
+without reading its file. The ``<collision>`` elements of links moved by joints off the chain
+(a gripper's fingers, another arm) are not read: those links are not part of this arm.
+
+A ``.xacro`` file is expanded by the ``xacro`` package (``pip install "armkit[xacro]"``); xacro
+evaluates the file's expressions, so expand only files you trust.
 """
 
 from __future__ import annotations
@@ -81,9 +89,51 @@ class URDFJoint:
     """(leader, multiplier, offset) of a mimic joint."""
 
 
+COLLISION_KINDS = ("box", "cylinder", "sphere", "mesh")
+"""The geometry elements a URDF <collision> may hold."""
+
+
+@dataclass(frozen=True)
+class URDFCollision:
+    """One <collision> element of a link rigidly attached to the chain (SI).
+
+    Attributes
+    ----------
+    link : str
+        The URDF link that declares it.
+    index : int
+        Its place among that link's <collision> elements, from 0.
+    chain_link : int
+        The chain link it is fixed to: 0 the root link, i the child link of the chain's moving
+        joint i (a link hanging on it through fixed joints is merged into it).
+    kind : {"box", "cylinder", "sphere", "mesh"}
+    size : ndarray
+        Box: (3,) edge lengths along its x, y, z; cylinder: (radius, length), its axis its z;
+        sphere: (radius,); mesh: (0,) (its file is not read). m.
+    T : ndarray, (4, 4)
+        The element's frame (its <origin>, after the fixed joints between) in the URDF frame
+        of the chain link.
+    """
+
+    link: str
+    index: int
+    chain_link: int
+    kind: str
+    size: NDArray
+    T: NDArray
+
+    def __post_init__(self):
+        freeze(self, "size", "T")
+
+
 @dataclass(frozen=True)
 class URDFTable:
-    """A URDF file, the chain chosen in it, and base and tool transforms (4, 4)."""
+    """A URDF file, the chain chosen in it, and base and tool transforms (4, 4).
+
+    ``collisions`` holds the <collision> elements of the links rigidly attached to the chain;
+    ``detached`` names the links with <collision> elements moved by joints off the chain (not
+    read: they are not part of this arm).
+    """
 
     path: str
     tip: str
@@ -92,6 +142,8 @@ class URDFTable:
     T_tool: NDArray = field(default_factory=lambda: np.eye(4))
     leaders: tuple[URDFJoint, ...] = ()
     """Joints off the chain that mimic joints of the chain follow."""
+    collisions: tuple[URDFCollision, ...] = ()
+    detached: tuple[str, ...] = ()
 
     def __post_init__(self):
         freeze(self, "T_base", "T_tool")
@@ -332,7 +384,9 @@ def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
         chain.append(_read_joint(item, path))
         link = item.parent
     chain.reverse()
-    return URDFTable(path, tip, tuple(chain), leaders=_leaders(chain, read, path))
+    collisions, detached = _read_collisions(root, roots[0], chain, parent_joint, path)
+    return URDFTable(path, tip, tuple(chain), leaders=_leaders(chain, read, path),
+                     collisions=collisions, detached=detached)
 
 
 def _leaders(chain: list[URDFJoint], read: dict[str, _Element], path: str
@@ -372,6 +426,92 @@ def _leaders(chain: list[URDFJoint], read: dict[str, _Element], path: str
                                  f"({_names(j.name for j in followers)}) stay within their "
                                  "limits", "none")
     return tuple(off_chain)
+
+
+def _positive(element: ET.Element, attribute: str, count: int, path: str,
+              where: str) -> NDArray:
+    """A required attribute of `count` positive lengths (m), each at most MAX_LENGTH."""
+    text = element.get(attribute)
+    expected = "a positive length (m)" if count == 1 else f"{count} positive lengths (m)"
+    if text is None:
+        raise ModelFileError(path, f"{where} {attribute}", expected, "none")
+    values = _numbers(text, count, path, f"{where} {attribute}", MAX_LENGTH)
+    if not (values > 0).all():
+        raise ModelFileError(path, f"{where} {attribute}", expected, found_text(text))
+    return values
+
+
+def _read_collision(element: ET.Element, link: str, index: int, chain_link: int,
+                    T_anchor_link: NDArray, path: str) -> URDFCollision:
+    """One <collision> element, every number checked; its frame in the chain link's frame."""
+    where = f"link {found_text(link)} <collision>[{index}]"
+    origin = element.find("origin")
+    xyz = _attribute(origin, "xyz", "0 0 0", 3, path, f"{where} <origin>", MAX_LENGTH)
+    rpy = _attribute(origin, "rpy", "0 0 0", 3, path, f"{where} <origin>", MAX_ANGLE)
+    geometry = element.find("geometry")
+    if geometry is None:
+        raise ModelFileError(path, f"{where} <geometry>", "a <geometry> element", "none")
+    shapes = list(geometry)
+    if len(shapes) != 1 or shapes[0].tag not in COLLISION_KINDS:
+        found = ("nothing" if not shapes else
+                 " ".join(f"<{found_text(str(x.tag))[1:-1]}>" for x in shapes[:4]))
+        raise ModelFileError(path, f"{where} <geometry>",
+                             "one of <box>, <cylinder>, <sphere> or <mesh>", found)
+    shape, kind = shapes[0], shapes[0].tag
+    at = f"{where} <{kind}>"
+    if kind == "box":
+        size = _positive(shape, "size", 3, path, at)
+    elif kind == "cylinder":
+        size = np.array([_positive(shape, "radius", 1, path, at)[0],
+                         _positive(shape, "length", 1, path, at)[0]])
+    elif kind == "sphere":
+        size = _positive(shape, "radius", 1, path, at)
+    else:
+        size = np.empty(0)      # a mesh: its file is not read (see the module's note)
+    return URDFCollision(link, index, chain_link, kind, size,
+                         T_anchor_link @ pose_from_xyz_rpy(xyz, rpy))
+
+
+def _read_collisions(root: ET.Element, root_link: str, chain: list[URDFJoint],
+                     parent_joint: dict[str, _Element], path: str
+                     ) -> tuple[tuple[URDFCollision, ...], tuple[str, ...]]:
+    """The <collision> elements of the links rigidly attached to the chain, each placed in the
+    frame of the chain link it hangs on (fixed joints merged, as `chain_from_urdf` merges
+    them), and the names of the links with <collision> elements that joints off the chain move.
+    """
+    anchors = {root_link: 0}                                # link -> chain link index
+    moving = 0
+    for joint in chain:
+        if joint.kind != "fixed":
+            moving += 1
+            anchors[joint.child] = moving
+    collisions: list[URDFCollision] = []
+    detached: list[str] = []
+    origins: dict[str, NDArray] = {}                        # fixed joint name -> its origin
+    for element in root.findall("link"):
+        found = element.findall("collision")
+        if not found:
+            continue
+        link = name = element.get("name")
+        T = np.eye(4)
+        while name not in anchors:
+            item = parent_joint[name]           # every link but the root has one (a tree)
+            if item.kind != "fixed":
+                break
+            if item.name not in origins:      # only its origin matters (checked as on the chain)
+                where = f"joint {found_text(item.name)} <origin>"
+                origin = item.element.find("origin")
+                origins[item.name] = pose_from_xyz_rpy(
+                    _attribute(origin, "xyz", "0 0 0", 3, path, where, MAX_LENGTH),
+                    _attribute(origin, "rpy", "0 0 0", 3, path, where, MAX_ANGLE))
+            T = origins[item.name] @ T
+            name = item.parent
+        if name not in anchors:
+            detached.append(link)
+            continue
+        collisions.extend(_read_collision(c, link, k, anchors[name], T, path)
+                          for k, c in enumerate(found))
+    return tuple(collisions), tuple(detached)
 
 
 def _refuse_loops(parent_joint: dict[str, _Element], path: str) -> None:

@@ -17,7 +17,8 @@ The shelf of the benchmark: from the lower compartment to the upper one, around 
 """
 
 from armkit.planning.collision import CollisionChecker, displacement_weights
-from armkit.planning.geometry import ArmGeometry, arm_geometry, default_geometry
+from armkit.planning.geometry import (ArmGeometry, arm_geometry, default_geometry,
+                                      primitive_capsule, urdf_geometry)
 from armkit.planning.plan import PlanResult, goals_from_pose, plan
 from armkit.planning.rrt import ValidityFunction
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
@@ -26,4 +27,4 @@ from armkit.planning.smooth import path_length, resample, resample_keeping_verti
 __all__ = ["Scene", "Box", "Sphere", "Cylinder", "Capsule", "ArmGeometry", "arm_geometry",
            "default_geometry", "CollisionChecker", "displacement_weights", "ValidityFunction",
            "PlanResult", "plan", "goals_from_pose", "shortcut", "resample",
-           "resample_keeping_vertices", "path_length"]
+           "resample_keeping_vertices", "path_length", "urdf_geometry", "primitive_capsule"]

@@ -1,4 +1,5 @@
-"""The arm as capsules: declared in the robot file, or derived from its joint origins.
+"""The arm as capsules: declared in the robot file, from a URDF's collision primitives, or
+derived from its joint origins.
 
 Each capsule (a sphere when its two points coincide) sits on one link: link 0 is the base frame,
 link i the frame after joint i (``armkit.fk_frames``), the last one the tool frame; its points
@@ -7,6 +8,16 @@ from the joint's origin (its frame's origin, on its axis) to the next joint's or
 origin for the last), with a stated radius; for a DH table these are the segments between
 consecutive DH frame origins. Self-collision is tested between capsules on links that are not
 adjacent, except for the pairs skipped (like an SRDF's disable_collisions).
+
+Precedence (`arm_geometry`): the robot file's own ``collision:`` section (its shapes, or the
+default capsules of its radius), then a URDF's ``<collision>`` primitives, then the default
+capsules. A URDF's primitives become capsules that contain them, so that the arm's geometry
+always holds the URDF's: a sphere stays a sphere, a cylinder becomes the capsule of its axis and
+radius, a box the capsule along its longest edge whose radius is half the diagonal of the other
+two (the box's cross-section fits in the capsule's disc, its length in the segment). Links that
+hang on a moving link through fixed joints are merged into it. Meshes are not read: an arm link
+whose URDF links have only mesh collisions gets its default capsule instead, and the geometry's
+notes say so.
 """
 
 from __future__ import annotations
@@ -20,6 +31,7 @@ from armkit.errors import InputError
 from armkit.kinematics.forward import fk_frames
 from armkit.model.chain import frozen_array
 from armkit.model.robot import Robot
+from armkit.model.urdf import URDFTable
 
 DEFAULT_RADIUS = 0.04       # m, the default capsules' radius when the robot file gives none
 
@@ -39,7 +51,13 @@ class ArmGeometry:
     skip : tuple of (int, int)
         Link pairs never tested against each other (adjacent links are never tested).
     source : str
-        Where the geometry comes from ("robot file", or the default and its radius).
+        Where the geometry comes from ("robot file", "URDF collision primitives", or the
+        default).
+    labels : tuple of str
+        Where each capsule comes from, e.g. ``URDF panda_link1[0] cylinder`` (the link's
+        first <collision>); empty, or one per capsule.
+    notes : tuple of str
+        What was left out or replaced (mesh collisions, links off the chain).
     """
 
     link: NDArray
@@ -48,6 +66,8 @@ class ArmGeometry:
     radius: NDArray
     skip: tuple[tuple[int, int], ...] = ()
     source: str = ""
+    labels: tuple[str, ...] = ()
+    notes: tuple[str, ...] = ()
 
     def __post_init__(self):
         link = frozen_array(self.link, np.int64).reshape(-1)
@@ -58,7 +78,12 @@ class ArmGeometry:
             raise InputError("arm geometry: expected finite points and positive radii, "
                              "found otherwise")
         skip = tuple(sorted({(min(int(i), int(j)), max(int(i), int(j))) for i, j in self.skip}))
-        for name, v in (("link", link), ("a", a), ("b", b), ("radius", radius), ("skip", skip)):
+        labels, notes = tuple(str(x) for x in self.labels), tuple(str(x) for x in self.notes)
+        if labels and len(labels) != m:
+            raise InputError(f"arm geometry labels: expected one per capsule ({m}), "
+                             f"found {len(labels)}")
+        for name, v in (("link", link), ("a", a), ("b", b), ("radius", radius), ("skip", skip),
+                        ("labels", labels), ("notes", notes)):
             object.__setattr__(self, name, v)
 
     def __len__(self) -> int:
@@ -107,8 +132,12 @@ def default_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
         links.append(i + 1)
         A.append((to_link[i + 1] @ a_body)[:3])
         B.append((to_link[i + 1] @ b_body)[:3])
+    n = robot.chain.n_joints
+    labels = ([] if len(links) == n else ["default: base to joint 1"]) + \
+        [f"default: joint {i + 1} to {'the tool' if i + 1 == n else f'joint {i + 2}'}"
+         for i in range(n)]
     geometry = ArmGeometry(links, A, B, np.full(len(links), float(radius)), skip,
-                           "default: segments between joint origins")
+                           "default: segments between joint origins", labels)
     return _skip_touching(robot, geometry)
 
 
@@ -135,11 +164,86 @@ def _skip_touching(robot: Robot, geometry: ArmGeometry, samples: int = 200) -> A
     if not extra:
         return geometry
     return ArmGeometry(geometry.link, geometry.a, geometry.b, geometry.radius,
-                       geometry.skip + tuple(extra), geometry.source)
+                       geometry.skip + tuple(extra), geometry.source, geometry.labels,
+                       geometry.notes)
+
+
+def primitive_capsule(kind: str, size: NDArray) -> tuple[NDArray, NDArray, float]:
+    """The capsule (a, b (3,) in the primitive's frame, radius, m) that contains a URDF
+    collision primitive: a sphere itself; a cylinder (radius, length; axis z) the capsule of
+    its axis and radius; a box (edge lengths (3,)) the capsule along its longest edge, of
+    radius half the diagonal of the other two edges."""
+    size = np.asarray(size, dtype=float)
+    if kind == "sphere":
+        return np.zeros(3), np.zeros(3), float(size[0])
+    if kind == "cylinder":
+        half = np.array([0.0, 0.0, size[1] / 2])
+        return -half, half, float(size[0])
+    if kind == "box":
+        k = int(np.argmax(size))
+        half = np.zeros(3)
+        half[k] = size[k] / 2
+        return -half, half, float(np.hypot(*np.delete(size, k)) / 2)
+    raise InputError(f"collision primitive: expected box, cylinder or sphere, found {kind!r}")
+
+
+def urdf_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
+                  skip: tuple[tuple[int, int], ...] = ()) -> ArmGeometry | None:
+    """Capsules containing the <collision> primitives of a URDF robot; None if it has none.
+
+    Each box, cylinder and sphere on a link rigidly attached to the chain becomes the capsule
+    that contains it (`primitive_capsule`) on the arm link it hangs on. An arm link with a URDF
+    link whose collisions are all meshes also gets its default capsule (`default_geometry`, of
+    `radius` m): meshes are not read. Link pairs are skipped as for the default capsules
+    (adjacent links, `skip`, and pairs touching in most sampled configurations).
+    """
+    table = robot.table
+    if not isinstance(table, URDFTable) or all(c.kind == "mesh" for c in table.collisions):
+        return None
+    # From the URDF frame of chain link k to armkit's link frame k: the same frame, except
+    # for the last link, whose armkit frame is the tool (chain.T_tool past the child link).
+    to_tool = np.linalg.inv(robot.chain.T_tool)
+    links, A, B, radii, labels = [], [], [], [], []
+    by_link: dict[str, list] = {}
+    for c in table.collisions:
+        by_link.setdefault(c.link, []).append(c)
+        if c.kind == "mesh":
+            continue
+        a, b, r = primitive_capsule(c.kind, c.size)
+        T = (to_tool if c.chain_link == robot.chain.n_joints else np.eye(4)) @ c.T
+        links.append(c.chain_link)
+        A.append(T[:3, :3] @ a + T[:3, 3])
+        B.append(T[:3, :3] @ b + T[:3, 3])
+        radii.append(r)
+        labels.append(f"URDF {c.link}[{c.index}] {c.kind}")
+    notes = []
+    mesh_links = [name for name, found in by_link.items() if all(c.kind == "mesh" for c in found)]
+    mesh_only = sorted({by_link[name][0].chain_link for name in mesh_links})
+    if mesh_links:
+        notes.append(f"mesh collisions not read (links {', '.join(mesh_links)}): default "
+                     f"capsules of radius {radius * 1e3:g} mm on arm links "
+                     f"{', '.join(map(str, mesh_only))}")
+        default = default_geometry(robot, radius)
+        for k in np.flatnonzero(np.isin(default.link, mesh_only)):
+            links.append(int(default.link[k]))
+            A.append(default.a[k])
+            B.append(default.b[k])
+            radii.append(float(default.radius[k]))
+            labels.append(default.labels[k])
+    beside = [f"{c.link} <collision>[{c.index}]" for c in table.collisions
+              if c.kind == "mesh" and c.link not in mesh_links]
+    if beside:
+        notes.append(f"mesh collisions not read beside primitives: {', '.join(beside)}")
+    if table.detached:
+        notes.append("links moved by joints off the chain are not part of the arm: "
+                     + ", ".join(table.detached))
+    geometry = ArmGeometry(links, A, B, radii, skip, "URDF collision primitives", labels, notes)
+    return _skip_touching(robot, geometry)
 
 
 def arm_geometry(robot: Robot, radius: float | None = None) -> ArmGeometry:
-    """The robot's collision geometry: its file's shapes, else default capsules.
+    """The robot's collision geometry: its file's shapes or radius, else its URDF's collision
+    primitives, else default capsules.
 
     Parameters
     ----------
@@ -147,13 +251,15 @@ def arm_geometry(robot: Robot, radius: float | None = None) -> ArmGeometry:
         m; asks for the default capsules with this radius whatever the file declares.
     """
     spec = robot.collision
+    skip = spec.skip if spec else ()
     if radius is not None:
-        return default_geometry(robot, float(radius), spec.skip if spec else ())
-    if spec is None:
-        return default_geometry(robot)
-    if spec.shapes:
+        return default_geometry(robot, float(radius), skip)
+    if spec is not None and spec.shapes:
         s = spec.shapes
         return ArmGeometry([x.link for x in s], [x.a for x in s], [x.b for x in s],
-                           [x.radius for x in s], spec.skip, "robot file")
-    return default_geometry(robot, spec.radius if spec.radius is not None else DEFAULT_RADIUS,
-                            spec.skip)
+                           [x.radius for x in s], spec.skip, "robot file",
+                           [f"robot file: collision.shapes[{i}]" for i in range(len(s))])
+    if spec is not None and spec.radius is not None:
+        return default_geometry(robot, spec.radius, skip)
+    from_urdf = urdf_geometry(robot, DEFAULT_RADIUS, skip)
+    return from_urdf if from_urdf is not None else default_geometry(robot, DEFAULT_RADIUS, skip)
