@@ -37,7 +37,6 @@ from numpy.typing import NDArray
 from armkit.kinematics import _kernels
 from armkit.kinematics.ik.task import task_errors_one
 from armkit.model.chain import Chain
-from armkit.spatial import invert
 
 PARALLEL = 1e-9          # |w_i x w_j| below this: parallel axes
 MEET = 1e-9              # distance (m) below this: intersecting axes
@@ -471,11 +470,27 @@ class Family:
     limits: NDArray
 
 
-def _axes(chain: Chain):
-    w = chain.screws[:, 3:].copy()
-    prismatic = ~chain.revolute
-    w[prismatic] = chain.screws[prismatic, :3]
-    return w, chain.points
+# Recognition runs once per solver, in plain Python on 3-tuples (for a handful of vectors
+# several times cheaper than NumPy's calls on tiny arrays).
+
+def _axes(chain: Chain) -> tuple[list, list]:
+    """Joint axis directions (the translation direction of a prismatic joint) and points."""
+    w = [tuple(S[3:]) if revolute else tuple(S[:3])
+         for S, revolute in zip(chain.screws.tolist(), chain.revolute.tolist())]
+    return w, [tuple(p) for p in chain.points.tolist()]
+
+
+def _dot3(a, b) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _sub3(a, b) -> tuple[float, float, float]:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def _axpy3(s, a, b) -> tuple[float, float, float]:
+    """s a + b."""
+    return (s * a[0] + b[0], s * a[1] + b[1], s * a[2] + b[2])
 
 
 def _cross3(a, b) -> tuple[float, float, float]:
@@ -488,36 +503,42 @@ def _parallel(a, b) -> bool:
 
 
 def _line_distance(w1, r1, w2, r2) -> float:
-    n, d = _cross3(w1, w2), r2 - r1
+    n, d = _cross3(w1, w2), _sub3(r2, r1)
     if math.hypot(*n) < PARALLEL:
         return math.hypot(*_cross3(d, w1))
-    return abs(n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / math.hypot(*n)
+    return abs(_dot3(n, d)) / math.hypot(*n)
 
 
-def _meeting_point(w1, r1, w2, r2) -> NDArray:
-    """The point where two intersecting, non-parallel lines meet."""
-    A = np.stack([w1, -w2], axis=1)
-    s, *_ = np.linalg.lstsq(A, r2 - r1, rcond=None)
-    return r1 + s[0] * w1
+def _meeting_point(w1, r1, w2, r2) -> tuple[float, float, float]:
+    """The point where two intersecting, non-parallel lines meet:
+    r1 + s w1 with s = ((r2 - r1) x w2) . (w1 x w2) / |w1 x w2|^2."""
+    n = _cross3(w1, w2)
+    return _axpy3(_dot3(_cross3(_sub3(r2, r1), w2), n) / _dot3(n, n), w1, r1)
 
 
-def _normal_to(a) -> NDArray:
-    """A unit vector normal to a (3,)."""
-    v = np.eye(3)[np.argmin(np.abs(a))]
-    v = v - a * np.dot(a, v)
-    return v / np.linalg.norm(v)
+def _normal_to(a) -> tuple[float, float, float]:
+    """A unit vector normal to a (unit, 3)."""
+    k = min(range(3), key=lambda i: abs(a[i]))
+    v = _axpy3(-a[k], a, tuple(float(i == k) for i in range(3)))
+    return _axpy3(1.0 / math.hypot(*v) - 1.0, v, v)
 
 
-def _pointing_axis(chain: Chain) -> int:
+def _home(chain: Chain) -> tuple[list, tuple]:
+    """T_home's rotation as rows, and its position."""
+    M = chain.T_home.tolist()
+    return [tuple(row[:3]) for row in M[:3]], tuple(row[3] for row in M[:3])
+
+
+def _pointing_axis(chain: Chain, w, r) -> int:
     """The tool axis a yaw-and-pitch arm points: the one along its last link (else normal to
     the pitch axes)."""
-    w, r = _axes(chain)
-    R = chain.T_home[:3, :3]
-    link = chain.T_home[:3, 3] - r[3]
-    link = link - w[1] * np.dot(w[1], link)
-    if np.linalg.norm(link) > MEET:
-        return int(np.argmax(np.abs(R.T @ link)))
-    return int(np.argmin(np.abs(R.T @ w[1])))
+    R, t0 = _home(chain)
+    link = _sub3(t0, r[3])
+    link = _axpy3(-_dot3(w[1], link), w[1], link)
+    columns = list(zip(*R))
+    if math.hypot(*link) > MEET:
+        return max(range(3), key=lambda k: abs(_dot3(columns[k], link)))
+    return min(range(3), key=lambda k: abs(_dot3(columns[k], w[1])))
 
 
 def _rotation_flags(k: int, pointing: bool) -> tuple[int, ...]:
@@ -529,18 +550,18 @@ def _rotation_flags(k: int, pointing: bool) -> tuple[int, ...]:
 
 def _family(chain: Chain, name: str, mask: tuple[int, ...], branches: int, rows: list,
             kernel) -> Family:
-    geometry = np.ascontiguousarray(np.vstack(rows), dtype=float)
-    limits = np.ascontiguousarray(np.vstack([chain.lower, chain.upper,
-                                             chain.revolute.astype(float)]))
+    geometry = np.array(rows, dtype=float)
+    limits = np.array((chain.lower, chain.upper, chain.revolute), dtype=float)
     geometry.setflags(write=False)
     limits.setflags(write=False)
     return Family(name, mask, branches, geometry, kernel, limits)
 
 
 def _home_inverse(chain: Chain) -> list:
-    """inv(T_home) as four rows: its rotation's columns, then its position."""
-    M = invert(chain.T_home)
-    return [M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3]]
+    """inv(T_home) as four rows: its rotation's columns (the home rotation's rows), then its
+    position."""
+    R, t0 = _home(chain)
+    return [*R, tuple(-_dot3(column, t0) for column in zip(*R))]
 
 
 def family_of(chain: Chain) -> Family | None:
@@ -549,39 +570,43 @@ def family_of(chain: Chain) -> Family | None:
     `armkit.kinematics.ik.IKSolver` asks once and keeps the answer.
     """
     w, r = _axes(chain)
-    n, rev = chain.n, chain.revolute
+    n, rev = chain.n, chain.revolute.tolist()
     meet = lambda i, j: (not _parallel(w[i], w[j])                   # noqa: E731
                          and _line_distance(w[i], r[i], w[j], r[j]) < MEET)
-    M = chain.T_home
-    R = M[:3, :3]
-    if n == 4 and rev.sum() == 3 and all(_parallel(w[i], w[0]) for i in range(4)):
-        p = int(np.flatnonzero(~rev)[0])
-        i1, i2, i3 = (int(i) for i in np.flatnonzero(rev))
+    along = lambda i: _dot3(w[i], w[1])                               # noqa: E731
+    if n == 4 and sum(rev) == 3 and all(_parallel(w[i], w[0]) for i in range(4)):
+        p = rev.index(False)
+        i1, i2, i3 = (i for i in range(4) if rev[i])
         a = w[i1]
         u = _normal_to(a)
-        rows = [a, w[p], w[i1], r[i1], w[i2], r[i2], r[i3], M[:3, 3], R.T @ u, u,
-                w[[i1, i2, i3]] @ a, [p, i1, i2], [i3, 0, 0]]
-        k = int(np.argmax(np.abs(R.T @ a)))
+        R, t0 = _home(chain)
+        rows = [a, w[p], w[i1], r[i1], w[i2], r[i2], r[i3], t0,
+                tuple(_dot3(column, u) for column in zip(*R)), u,
+                tuple(_dot3(w[i], a) for i in (i1, i2, i3)), (p, i1, i2), (i3, 0, 0)]
+        k = max(range(3), key=lambda k: abs(_dot3(tuple(row[k] for row in R), a)))
         return _family(chain, "lift_swing", _rotation_flags(k, pointing=False), 2, rows,
                        _lift_swing)
-    if (n == 4 and rev.all() and _parallel(w[1], w[2]) and _parallel(w[1], w[3])
+    if (n == 4 and all(rev) and _parallel(w[1], w[2]) and _parallel(w[1], w[3])
             and not _parallel(w[0], w[1])):
-        k = _pointing_axis(chain)
-        rows = [*w, *r, M[:3, 3], M[:3, k], w[1:4] @ w[1], [k, 0, 0]]
+        k = _pointing_axis(chain, w, r)
+        R, t0 = _home(chain)
+        rows = [*w, *r, t0, tuple(row[k] for row in R), (along(1), along(2), along(3)),
+                (k, 0, 0)]
         return _family(chain, "yaw_pitch", _rotation_flags(k, pointing=True), 4, rows,
                        _yaw_pitch)
     if n != 6:
         return None
-    if (rev.all() and _parallel(w[1], w[2]) and _parallel(w[1], w[3])
+    if (all(rev) and _parallel(w[1], w[2]) and _parallel(w[1], w[3])
             and not _parallel(w[0], w[1]) and meet(4, 5) and not _parallel(w[4], w[1])):
         rows = [*w, *r, *_home_inverse(chain), _meeting_point(w[4], r[4], w[5], r[5]),
-                _normal_to(w[1]), w[1:4] @ w[1]]
+                _normal_to(w[1]), (along(1), along(2), along(3))]
         return _family(chain, "parallel_wrist", (1,) * 6, 8, rows, _parallel_wrist)
-    if rev[[0, 1, 3, 4, 5]].all() and meet(0, 1) and meet(3, 4) and not _parallel(w[4], w[5]):
+    if all(rev[i] for i in (0, 1, 3, 4, 5)) and meet(0, 1) and meet(3, 4) and \
+            not _parallel(w[4], w[5]):
         centre = _meeting_point(w[3], r[3], w[4], r[4])
-        if math.hypot(*_cross3(centre - r[5], w[5])) < MEET:
+        if math.hypot(*_cross3(_sub3(centre, r[5]), w[5])) < MEET:
             rows = [*w, *r, *_home_inverse(chain), _meeting_point(w[0], r[0], w[1], r[1]),
-                    centre, _normal_to(w[5]), [0.0 if rev[2] else 1.0, 0, 0]]
+                    centre, _normal_to(w[5]), (0.0 if rev[2] else 1.0, 0, 0)]
             return _family(chain, "spherical_wrist", (1,) * 6, 8, rows, _spherical_wrist)
     return None
 
