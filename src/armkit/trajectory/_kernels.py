@@ -210,13 +210,19 @@ def _put(times, values, k, duration, top):
 
 
 @_jit
-def _timing(kind, q0, qf, V, A, J, phase, times, values):
+def profile_timing(kind, problem, phase, times, values):
     """Phases of every joint of every problem p; kind 2 trapezoid, 3 double S.
+
+    problem (5, P, n): q0, qf, V, A, J stacked (a trapezoid's J is unused, any positive
+    value); out: times (P, n, K + 1), the start of each phase and the end, and values (P, n, K),
+    the signed top derivative of each phase (K = 3 or 7). Returns 0, or the first bad input:
+    1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit. One problem is a batch of one.
 
     With phase sync, one shape over a unit distance under the tightest limit per unit distance,
     scaled by each joint's distance; with time sync, the slowest joint's shortest duration for
     every joint.
     """
+    q0, qf, V, A, J = problem[0], problem[1], problem[2], problem[3], problem[4]
     P, n = q0.shape
     for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
         for j in range(n):
@@ -269,16 +275,6 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
                     tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
             _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j], values[p, j])
     return 0
-
-
-def profile_phases(kind: int, q0: np.ndarray, qf: np.ndarray, V: np.ndarray, A: np.ndarray,
-                   J: np.ndarray, phase: bool) -> tuple[np.ndarray, np.ndarray, int]:
-    """Phase times (P, n, K + 1) and top derivatives (P, n, K) for q0 ... J of shape (P, n),
-    and 0, or the first bad input: 1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit."""
-    P, n = q0.shape
-    K = 3 if kind == 2 else 7
-    times, values = np.empty((P, n, K + 1)), np.empty((P, n, K))
-    return times, values, _timing(kind, q0, qf, V, A, J, phase, times, values)
 
 
 @_jit

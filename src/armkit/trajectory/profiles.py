@@ -88,8 +88,7 @@ def trapezoidal_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Arr
     Profile
         ``order`` 2: phases accelerate, cruise, decelerate.
     """
-    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax)])
-    return _profile(2, arrays, ("vmax", "amax"), sync)
+    return _profile(2, _problem(q0, qf, vmax, amax, 1.0), sync)
 
 
 def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -117,8 +116,7 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     >>> p.duration.shape
     (1000,)
     """
-    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax), ("jmax", jmax)])
-    return _profile(3, arrays, ("vmax", "amax", "jmax"), sync)
+    return _profile(3, _problem(q0, qf, vmax, amax, jmax), sync)
 
 
 def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
@@ -183,19 +181,29 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     return Trajectory(breaks, c, label=label)
 
 
-def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike]]) -> NDArray:
-    """q0, qf and the limits stacked into one float array (k, ..., n), each broadcast to the
-    problems' shape (one allocation: a single problem costs little more than the kernel); the
-    kernel checks the values."""
-    raw = [q0, qf] + [v for _, v in lims]
+def _problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+             jmax: ArrayLike) -> NDArray:
+    """q0, qf and the limits stacked into one float array (5, ..., n), each broadcast to the
+    problems' shape (one allocation; the kernel checks the values). One problem of arrays (n,)
+    with limits that are numbers or (n,) takes the short way: its shape is q0's, without asking
+    NumPy to broadcast the shapes first."""
+    if (type(q0) is np.ndarray and type(qf) is np.ndarray and q0.ndim == 1
+            and q0.shape == qf.shape and q0.shape[0] > 0):
+        stacked = np.empty((5,) + q0.shape)
+        try:
+            stacked[0], stacked[1], stacked[2], stacked[3], stacked[4] = q0, qf, vmax, amax, jmax
+            return stacked
+        except (TypeError, ValueError):
+            pass                                # a limit of another shape: the general way
+    raw = (q0, qf, vmax, amax, jmax)
     try:
         shape = np.broadcast_shapes(*(np.shape(x) for x in raw))
-        stacked = np.empty((len(raw),) + shape)
+        stacked = np.empty((5,) + shape)
         for row, x in zip(stacked, raw):
             row[...] = x
     except (TypeError, ValueError):
         raise InputError(f"q0, qf, limits: expected numbers of shapes that broadcast to "
-                         f"(..., n), found {[np.shape(x) for x in raw]}") from None
+                         f"(..., n), found {[np.shape(x) for x in raw[:4]]}") from None
     if not shape:
         raise InputError("q0, qf: expected shape (..., n), found scalars")
     return stacked
@@ -209,22 +217,21 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
     return a, b
 
 
-def _profile(order: int, arrays: NDArray, names: tuple[str, ...], sync: str) -> Profile:
-    """Run the kernel on q0, qf, vmax, amax(, jmax) stacked as (k, ..., n)."""
-    if sync not in ("time", "phase"):
+def _profile(order: int, arrays: NDArray, sync: str) -> Profile:
+    """Run the kernel on q0, qf, vmax, amax, jmax stacked as (5, ..., n) (a trapezoid's jmax
+    is 1.0, unused)."""
+    if sync != "time" and sync != "phase":
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
     shape, n = arrays.shape[1:], arrays.shape[-1]
-    flat = arrays.reshape(arrays.shape[0], -1, n)
-    jerk = flat[4] if order == 3 else np.ones_like(flat[0])    # a trapezoid's unused jerk
-    times, values, bad = _kernels.profile_phases(order, flat[0], flat[1], flat[2], flat[3], jerk,
-                                                 sync == "phase")
+    K = 3 if order == 2 else 7
+    times, values = np.empty(shape + (K + 1,)), np.empty(shape + (K,))
+    bad = _kernels.profile_timing(order, arrays.reshape(5, -1, n), sync == "phase",
+                                  times.reshape(-1, n, K + 1), values.reshape(-1, n, K))
     if bad == 1:
         raise InputError("q0, qf: expected finite joint values, found NaN or inf")
     if bad:
-        name = names[bad - 2]
+        name = ("vmax", "amax", "jmax")[bad - 2]
         finite = "" if name == "vmax" or (name == "amax" and order == 3) else " finite"
         raise InputError(f"{name}: expected positive{finite} limits, found "
                          f"{np.unique(arrays[bad]).tolist()}")
-    times = times.reshape(shape + times.shape[-1:])
-    return Profile(times[..., 0, -1].copy(), times, values.reshape(shape + values.shape[-1:]),
-                   order, arrays[0], arrays[1])
+    return Profile(times[..., 0, -1].copy(), times, values, order, arrays[0], arrays[1])
