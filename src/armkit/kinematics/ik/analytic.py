@@ -141,9 +141,7 @@ def _sp1(w, u, v):
     works and 0 is given, rather than the angle of two round-off vectors.
     """
     a, b = _perp(w, u), _perp(w, v)
-    scale = 1e-18 * _dot(u, u)                          # squared: 1e-9 of |u|
-    if scale < 1e-300:
-        scale = 1e-300
+    scale = max(1e-18 * _dot(u, u), 1e-300)             # squared: 1e-9 of |u|
     if _dot(a, a) < scale or _dot(b, b) < scale:
         return 0.0
     return math.atan2(_dot(w, _cross(a, b)), _dot(a, b))
@@ -183,7 +181,7 @@ def _sp2(w1, w2, u, v):
     n = _cross(w1, w2)
     uu = _dot(u, u)
     g2 = (uu - alpha * alpha - beta * beta - 2.0 * alpha * beta * c12) / _dot(n, n)
-    if not g2 > -ACOS_SLACK * (uu if uu > 1e-300 else 1e-300):
+    if not g2 > -ACOS_SLACK * max(uu, 1e-300):
         g2 = math.nan
     elif g2 < 0.0:
         g2 = 0.0

@@ -18,11 +18,11 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.errors import InputError
 from armkit.kinematics import _kernels
 from armkit.kinematics.ik import analytic, numeric
-from armkit.kinematics.ik.choose import CRITERIA, fold_into_limits, scores, within_limits
+from armkit.kinematics.ik.choose import CRITERIA, scores
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
                                           not_converged)
 from armkit.kinematics.ik.seeds import SeedBank
-from armkit.kinematics.ik.task import as_mask, mask_name, task_errors
+from armkit.kinematics.ik.task import as_mask, mask_name
 from armkit.kinematics.jacobian import pose_and_jacobian
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
