@@ -74,7 +74,7 @@ class Trajectory:
     label: str = ""
 
     def __post_init__(self):
-        breaks, coefficients = frozen_array(self.breaks), frozen_array(self.coefficients)
+        breaks, coefficients = _frozen(self.breaks), _frozen(self.coefficients)
         if breaks.ndim != 1 or breaks.shape[0] < 2:
             raise InputError(f"breaks: expected shape (m + 1,) with m >= 1, found {breaks.shape}")
         if coefficients.ndim != 3 or coefficients.shape[0] != breaks.shape[0] - 1:
@@ -213,6 +213,16 @@ class Trajectory:
         ndarray, shape (m, S, n)
         """
         return piece_values(self.coefficients, np.asarray(tau, dtype=float), derivative)
+
+
+def _frozen(a: ArrayLike) -> NDArray:
+    """`frozen_array`, without its copy for a float array that is read-only and is no view of
+    another array or buffer (a builder's fresh kernel output, frozen by the builder: nothing
+    else can write to it)."""
+    if (type(a) is np.ndarray and a.dtype == np.float64 and not a.flags.writeable
+            and not isinstance(a.base, (np.ndarray, memoryview, bytes, bytearray))):
+        return a
+    return frozen_array(a)
 
 
 def at_rest(q: ArrayLike, label: str = "") -> Trajectory:

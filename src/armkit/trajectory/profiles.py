@@ -178,6 +178,8 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     breaks, c = _kernels.profile_pieces(profile.order, np.ascontiguousarray(profile.times),
                                         np.ascontiguousarray(profile.values),
                                         np.ascontiguousarray(profile.q0, dtype=float), 1e-12)
+    breaks.setflags(write=False)                # fresh and ours: the Trajectory keeps them
+    c.setflags(write=False)
     return Trajectory(breaks, c, label=label)
 
 
