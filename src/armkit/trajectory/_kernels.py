@@ -191,9 +191,9 @@ def _phases(kind, D, sign, tj, ta, tv, times, values):
     v = D / (ta + tv) if ta + tv > 0.0 else 0.0
     a = v / (ta - tj) if ta - tj > 0.0 else 0.0
     if kind == 2:
-        _put(times, values, 0, ta, sign * a)
-        _put(times, values, 1, tv, 0.0)
-        _put(times, values, 2, ta, -sign * a)
+        # A loop, not three calls with constant k: numba would compile _put once per constant.
+        for k, (duration, top) in enumerate(((ta, sign * a), (tv, 0.0), (ta, -sign * a))):
+            _put(times, values, k, duration, top)
         return
     j = sign * a / tj if tj > 0.0 else 0.0
     for k, (duration, top) in enumerate(((tj, j), (ta - 2.0 * tj, 0.0), (tj, -j), (tv, 0.0),
@@ -286,7 +286,19 @@ def profile_pieces(order, times, values, q0, tol):
     n, P = values.shape
     start, end = times[0, 0], times[0, P]
     eps = tol * (end - start)
-    inner = np.sort(times[:, 1:P].copy().reshape(-1))
+    # The joints' inner phase times, sorted by insertion (a few dozen: cheaper to compile than
+    # np.sort, whose quicksort is eight more functions for numba to build on a first call).
+    inner = np.empty(n * (P - 1))
+    count = 0
+    for j in range(n):
+        for k in range(1, P):
+            t = times[j, k]
+            i = count
+            while i > 0 and inner[i - 1] > t:
+                inner[i] = inner[i - 1]
+                i -= 1
+            inner[i] = t
+            count += 1
     breaks = np.empty(inner.shape[0] + 2)
     breaks[0] = start
     m = 1
