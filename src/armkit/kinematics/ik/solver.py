@@ -279,8 +279,7 @@ class IKSolver:
         object.__setattr__(self, "_seed", int(seed))
         object.__setattr__(self, "_threads", threads)
         object.__setattr__(self, "_bank", None)
-        object.__setattr__(self, "_mid", 0.5 * (robot.chain.sampling_limits[0]
-                                                + robot.chain.sampling_limits[1]))
+        object.__setattr__(self, "_middle", None)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"IKSolver is immutable: cannot set {name}")
@@ -296,6 +295,14 @@ class IKSolver:
         if self._reach is None:
             object.__setattr__(self, "_reach", reach_bound(self.robot))
         return self._reach
+
+    @property
+    def _mid(self) -> NDArray:
+        """The middle of the sampling limits (n,): q_ref when no q0 is given (on first use)."""
+        if self._middle is None:
+            low, high = self.robot.chain.sampling_limits
+            object.__setattr__(self, "_middle", 0.5 * (low + high))
+        return self._middle
 
     @property
     def _kernel(self) -> numeric.KernelArgs:
