@@ -191,7 +191,7 @@ def _sp2(w1, w2, u, v):
     return _sp1(w1, z0, v), _sp1(w1, z1, v), _sp1(w2, u, z0), _sp1(w2, u, z1)
 
 
-@_helper
+@_inline
 def _planar_2r(wa, ra, wb, rb, p, x):
     """Angles of two parallel axes a then b taking point p (home) to x, two elbows:
     ta of each, then tb of each.
@@ -208,7 +208,7 @@ def _planar_2r(wa, ra, wb, rb, p, x):
     return ta0, ta1, tb0, tb1
 
 
-@_helper
+@_inline
 def _home_undone(g, T):
     """g = T @ inv(T_home) for a family whose geometry rows 12-15 hold inv(T_home) (rotation
     columns, then position): the rotation as three columns, and the position."""
@@ -361,7 +361,7 @@ def _spherical_wrist_one(g, T, q):
 
 # --- every branch checked: folded into the limits, FK, errors, distinct --------------------------
 
-@_helper
+@_inline
 def _fold(v, lower, upper, ref):
     """A revolute angle wrapped to [-pi, pi), then moved by whole turns into [lower, upper]
     nearest ref (the turn nearest ref and its two neighbours: ranges up to four turns); left
