@@ -16,8 +16,9 @@ its 8 closed-form solutions (`ik_solutions`), and `ik` of one tool_changer_6dof 
 Levenberg-Marquardt); `workspace` of inspection_6dof with 10,000 samples; `spline` 4-5-5
 through paper 4's Table 1, sampled at 100 times; one 6-joint `jerk_limited` motion; `retime`
 of 10 waypoints. ``--calls`` runs some of them only. Beside the wall time of the first call on
-an empty cache, its CPU time (``time.process_time``), which a busy machine inflates less. Their inputs are built without armkit's kernels, so each
-process compiles only what its own call needs.
+an empty cache, its CPU time (``time.process_time``), which a busy machine inflates less.
+Their inputs are built without armkit's kernels, so each process compiles only what its own
+call needs.
 """
 
 from __future__ import annotations

@@ -44,10 +44,16 @@ ACOS_SLACK = 1e-9        # |cos| up to 1 + this is rounding at a boundary, clipp
 SAME = 1e-9              # branches closer than this in every joint are one solution
 
 # error_model="numpy": a division by zero gives inf or NaN (a branch without a solution), as
-# in NumPy, instead of raising.
+# in NumPy, instead of raising. Compilation on an empty cache is what these kernels cost most
+# (BENCHMARKS.md, start-up): one cached kernel per family, so a robot compiles only its own;
+# `_helper` for what is called from many places (compiled once, no Python wrapper, since only
+# kernels call it); `_inline` for what is called from one place (inlined at numba's IR level:
+# one compilation fewer; inlining the many-place helpers too would copy their IR at every call
+# site and cost more to compile, measured).
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 _inline = numba.njit(inline="always", error_model="numpy")
-_helper = numba.njit(nogil=True, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
+_helper = numba.njit(nogil=True, error_model="numpy", no_cpython_wrapper=True,
+                     no_cfunc_wrapper=True)
 
 
 # --- 3-vectors as tuples ----------------------------------------------------------------------
