@@ -15,8 +15,10 @@ over rounds (armkit and rtb interleaved round by round):
 - "ik()": one `armkit.ik` per target (a solver derived per call), mean;
 - the partial tasks (position, +yaw, +pitch, +axis) on the 6- and 7-joint arms: success and
   batch time;
-- every closed-form solution of 1000 UR5 targets: one batch `IKSolver.solutions` call against a
-  loop of single calls.
+- every closed-form solution (``--solutions`` runs only this part): 1000 UR5 and Puma 560
+  targets in one `IKSolver.solutions` call, against one target per call (a held solver, and
+  `armkit.ik_solutions`) and, on the Puma, roboticstoolbox's ``ikine_a`` for its 8
+  configurations; interleaved rounds, median [min-max].
 
 The load average is printed before and after: the machine may be shared.
 """
@@ -24,6 +26,7 @@ The load average is printed before and after: the machine may be shared.
 from __future__ import annotations
 
 import argparse
+import itertools
 import os
 import time
 import warnings
@@ -37,6 +40,7 @@ import armkit
 from armkit.kinematics.ik import IKSolver, ik
 from armkit.kinematics.ik.task import as_mask, task_errors
 from armkit.spatial import matrix_to_rpy
+from common import Spread, interleaved, load, ratio
 
 ROBOTS = ["ur5", "puma560", "inspection_6dof", "stanford", "panda", "tool_changer_6dof"]
 PARTIAL = ["position", "position+yaw", "position+pitch", "position+axis"]
@@ -113,11 +117,58 @@ def row(robot, solver, success, batch, one, wrapper, iterations):
           f"{wrapper} | {it} |", flush=True)
 
 
+def solutions(rounds: int) -> None:
+    """Every closed-form solution: one batch call of 1000 targets against single calls (a held
+    solver, and `armkit.ik_solutions`, which derives the solver per call), interleaved round by
+    round; on the Puma 560 also against roboticstoolbox's analytic solver (``ikine_a``, one
+    call per configuration: 8 per target), in the same rounds."""
+    print(f"\nEvery closed-form solution, one target per call and 1000 in one call; median "
+          f"[min-max] over {rounds} interleaved rounds, {load()}")
+    for name in ("ur5", "puma560"):
+        robot = armkit.robot(name)
+        T = armkit.fk(robot, np.random.default_rng(2).uniform(robot.lower, robot.upper,
+                                                              (1000, robot.n)))
+        solver = IKSolver(robot)
+        solver.solutions(T[:2])
+        solver.solutions(T[0])
+        single = 200
+        cases = {"batch": lambda: solver.solutions(T),
+                 "held": lambda: [solver.solutions(T[i]) for i in range(single)],
+                 "ik_solutions": lambda: [armkit.ik_solutions(robot, T[i])
+                                          for i in range(single)]}
+        configs = ["".join(c) for c in itertools.product("lr", "ud", "nf")]
+        if name == "puma560":
+            puma = rtb.models.DH.Puma560()
+            cases["rtb"] = lambda: [[puma.ikine_a(T[i], config=c) for c in configs]
+                                    for i in range(20)]
+        times = interleaved(cases, rounds)
+        per = {"batch": 1000, "held": single, "ik_solutions": single, "rtb": 20}
+        spread = {k: Spread(tuple(t / per[k] for t in v.times)) for k, v in times.items()}
+        sols = solver.solutions(T)
+        print(f"  {name}: {sols.count.sum()} solutions of 1000 targets, "
+              f"{sols.count.min()}-{sols.count.max()} per target")
+        print(f"    one call, 1000 targets, per target   {spread['batch'].text()}")
+        print(f"    IKSolver.solutions, one target       {spread['held'].text()}   "
+              f"(batch faster per target: {ratio(spread['held'], spread['batch'])})")
+        print(f"    armkit.ik_solutions, one target      {spread['ik_solutions'].text()}")
+        if "rtb" in spread:
+            print(f"    rtb ikine_a x 8 configurations       {spread['rtb'].text()}   "
+                  f"(rtb / held solver: {ratio(spread['rtb'], spread['held'])}; rtb / "
+                  f"ik_solutions: {ratio(spread['rtb'], spread['ik_solutions'])})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="200 targets, 2 rounds")
+    parser.add_argument("--solutions", action="store_true",
+                        help="only every closed-form solution (the last section)")
+    parser.add_argument("--rounds", type=int, default=None, help="rounds (default 3, quick 2)")
     args = parser.parse_args()
     n_targets, n_single, n_ikpy, rounds = (200, 50, 10, 2) if args.quick else (1000, 200, 30, 3)
+    rounds = args.rounds or rounds
+    if args.solutions:
+        solutions(rounds)
+        return
     print(f"load average before: {os.getloadavg()}")
     print("| robot | solver | success | batch us/target min/med/max | 1 call us | ik() us | "
           "iterations |")
@@ -179,20 +230,7 @@ def main() -> None:
             ok = judge(robot, result.q, T, mask)
             cells.append(f"{100 * ok.mean():.1f} %, {spread(times, n_targets)}")
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
-    ur5 = armkit.robot("ur5")
-    T = armkit.fk(ur5, np.random.default_rng(2).uniform(ur5.lower, ur5.upper, (1000, 6)))
-    solver = IKSolver(ur5)
-    solver.solutions(T[:2])
-    batch, loop = [], []
-    for _ in range(rounds):
-        sols, dt = timed(lambda: solver.solutions(T))
-        batch.append(dt)
-        _, dt = timed(lambda: [solver.solutions(T[i]) for i in range(200)])
-        loop.append(dt)
-    print(f"\nEvery closed-form solution of 1000 ur5 targets: one call {spread(batch, 1000)} us "
-          f"per target, a loop of single calls {spread(loop, 200)} us per target "
-          f"({np.median(loop) / 200 / (np.median(batch) / 1000):.1f}x); "
-          f"{sols.count.sum()} solutions, {sols.count.min()}-{sols.count.max()} per target")
+    solutions(rounds)
     print(f"load average after: {os.getloadavg()}")
 
 

@@ -11,11 +11,14 @@ gets its own cache directory, so that no call finds kernels another call compile
 min-median-max over the rounds, the calls interleaved within a round; the load average is
 printed with them.
 
-The calls: `fk` and `jacobian` of one UR5 configuration; `ik` of one UR5 pose (closed form)
-and of one tool_changer_6dof pose (numeric, Levenberg-Marquardt); `workspace` of
-inspection_6dof with 10,000 samples; `spline` 4-5-5 through paper 4's Table 1, sampled at 100
-times; `retime` of 10 waypoints. Their inputs are built without armkit's kernels, so each
-process compiles only what its own call needs.
+The calls: `fk` and `jacobian` of one UR5 configuration; `ik` of one UR5 pose (closed form),
+its 8 closed-form solutions (`ik_solutions`), and `ik` of one tool_changer_6dof pose (numeric,
+Levenberg-Marquardt); `workspace` of inspection_6dof with 10,000 samples; `spline` 4-5-5
+through paper 4's Table 1, sampled at 100 times; one 6-joint `jerk_limited` motion; `retime`
+of 10 waypoints. ``--calls`` runs some of them only. Beside the wall time of the first call on
+an empty cache, its CPU time (``time.process_time``), which a busy machine inflates less.
+Their inputs are built without armkit's kernels, so each process compiles only what its own
+call needs.
 """
 
 from __future__ import annotations
@@ -34,18 +37,19 @@ from common import Spread, load
 CHILD = """
 import json, sys, time
 start = time.perf_counter()
+cpu_start = time.process_time()
 import armkit
 imported = time.perf_counter()
 import numpy as np
 from armkit.spatial import pose_from_xyz_rpy
 what = sys.argv[1]
-if what in ("fk", "jacobian", "ik closed form"):
+if what in ("fk", "jacobian", "ik closed form", "ik_solutions"):
     robot = armkit.robot("ur5")
 elif what == "ik numeric":
     robot = armkit.robot("tool_changer_6dof")
 elif what in ("workspace", "retime"):
     robot = armkit.robot("inspection_6dof")
-loaded = time.perf_counter()
+loaded, cpu_loaded = time.perf_counter(), time.process_time()
 q = np.deg2rad([10.0, -80.0, 70.0, -60.0, -90.0, 20.0])
 if what == "import":
     pass
@@ -56,6 +60,9 @@ elif what == "jacobian":
 elif what == "ik closed form":
     result = armkit.ik(robot, pose_from_xyz_rpy([0.4, 0.1, 0.3], [np.pi, 0.0, 0.0]))
     assert result.success, result.reason
+elif what == "ik_solutions":
+    solutions = armkit.ik_solutions(robot, pose_from_xyz_rpy([0.4, 0.1, 0.3], [np.pi, 0.0, 0.0]))
+    assert solutions.count == 8, solutions.count
 elif what == "ik numeric":
     from armkit.spatial import exp_se3
     # A reachable pose from the product of exponentials (NumPy, no kernel): the tool's pose
@@ -71,15 +78,18 @@ elif what == "workspace":
 elif what == "spline":
     points = np.deg2rad([[50.4, -180, 130], [43.2, -166, 123], [35, -152, 116], [27, -137, 108]])
     armkit.spline([0, 2, 4, 5], points, "4-5-5").sample(np.linspace(0, 5, 100))
+elif what == "jerk_limited":
+    armkit.jerk_limited(np.zeros(6), q, 1.0, 2.0, 10.0)
 elif what == "retime":
     waypoints = np.random.default_rng(0).uniform(-1.0, 1.0, (10, 6))
     assert armkit.retime(waypoints, robot.velocity_limits, robot.acceleration_limits).success
-done = time.perf_counter()
-print(json.dumps({"import": imported - start, "robot": loaded - imported, "call": done - loaded}))
+done, cpu_done = time.perf_counter(), time.process_time()
+print(json.dumps({"import": imported - start, "robot": loaded - imported, "call": done - loaded,
+                  "call_cpu": cpu_done - cpu_loaded}))
 """
 
-CALLS = ("import", "fk", "jacobian", "ik closed form", "ik numeric", "workspace", "spline",
-         "retime")
+CALLS = ("import", "fk", "jacobian", "ik closed form", "ik_solutions", "ik numeric", "workspace",
+         "spline", "jerk_limited", "retime")
 
 
 def run(what: str, cache: str) -> dict[str, float]:
@@ -94,26 +104,31 @@ def run(what: str, cache: str) -> dict[str, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--calls", nargs="+", choices=CALLS, default=CALLS,
+                        help="only these first calls")
     args = parser.parse_args()
+    calls = tuple(args.calls)
     print(load())
-    cold: dict[str, list[dict]] = {c: [] for c in CALLS}
-    warm: dict[str, list[dict]] = {c: [] for c in CALLS}
+    cold: dict[str, list[dict]] = {c: [] for c in calls}
+    warm: dict[str, list[dict]] = {c: [] for c in calls}
     for _ in range(args.rounds):
-        for what in CALLS:
+        for what in calls:
             with tempfile.TemporaryDirectory() as cache:
                 cold[what].append(run(what, cache))
                 warm[what].append(run(what, cache))
     print(load())
-    print(f"\n{'first call':16} {'empty numba cache':>26} {'warm numba cache':>26}")
-    for what in CALLS:
+    print(f"\n{'first call':16} {'empty numba cache':>26} {'its CPU time':>26} "
+          f"{'warm numba cache':>26}")
+    for what in calls:
         key = "import" if what == "import" else "call"
         a = Spread(tuple(r[key] for r in cold[what]))
+        cpu = Spread(tuple(r["call_cpu"] for r in cold[what])).text("s") if key == "call" else ""
         b = Spread(tuple(r[key] for r in warm[what]))
-        print(f"{what:16} {a.text('s'):>26} {b.text('s'):>26}")
-    robots = Spread(tuple(r["robot"] for c in CALLS[1:] for r in cold[c] + warm[c]))
+        print(f"{what:16} {a.text('s'):>26} {cpu:>26} {b.text('s'):>26}")
+    robots = Spread(tuple(r["robot"] for c in calls if c != "import" for r in cold[c] + warm[c]))
     print(f"\n`import armkit` is the import alone; every other row is the call alone, after the"
           f"\nimport and `armkit.robot(...)` (loading a built-in robot: {robots.text('s')}).")
-    imports = [r["import"] for c in CALLS for r in cold[c] + warm[c]]
+    imports = [r["import"] for c in calls for r in cold[c] + warm[c]]
     print(f"`import armkit` over all {len(imports)} processes: median {np.median(imports):.3f} s")
 
 

@@ -10,7 +10,9 @@
    (four calls, one per derivative) and a vectorised NumPy Horner evaluation;
 3. jerk-limited profiles, 6 joints, 1000 random start/goal pairs: the batch call against
    ruckig's ``calculate`` called 1000 times (its own loop over the same pairs, from Python),
-   with the largest duration difference; also one call of each;
+   with the largest duration difference; also one call of each, and ruckig's call with its
+   inputs set and its phases read back (what ruckig as armkit's single-call backend would cost
+   before building armkit's result);
 4. retiming a 6-joint path through 10 waypoints within velocity and acceleration limits:
    against toppra on the same spline and the same grid, with both durations.
 
@@ -145,13 +147,23 @@ def profiles(rng, pairs: int, repeat: int) -> None:
          per(loop, pairs), "us")
     inp.current_position, inp.target_position = starts[0], goals[0]
     a, b = q0[0], qf[0]
+    def ruckig_phases():
+        """What using ruckig for one call would cost: its inputs set, its calculation, and its
+        seven phases per joint read back (durations and jerks), before any armkit type."""
+        inp.current_position, inp.target_position = starts[0], goals[0]
+        otg.calculate(inp, out)
+        return [(p.t, p.j) for p in out.profiles[0]]
+
     times = interleaved({"profile": lambda: jerk_limited_profile(a, b, vmax, amax, jmax),
                          "trajectory": lambda: jerk_limited(a, b, vmax, amax, jmax),
-                         "ruckig": lambda: otg.calculate(inp, out)}, repeat, number=1000)
+                         "ruckig": lambda: otg.calculate(inp, out),
+                         "ruckig phases": ruckig_phases}, repeat, number=1000)
     line("one jerk_limited_profile call", times["profile"], "one ruckig.calculate",
          times["ruckig"], "us")
     line("one jerk_limited (a Trajectory)", times["trajectory"], "one ruckig.calculate",
          times["ruckig"], "us")
+    line("one jerk_limited_profile call", times["profile"], "ruckig, inputs + phases read",
+         times["ruckig phases"], "us")
     print(f"  largest relative duration difference to ruckig: {worst:.1e}")
 
 
@@ -186,6 +198,7 @@ def retiming(rng, repeat: int) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats, 1e5 samples")
+    parser.add_argument("--profiles", action="store_true", help="only the profiles (case 3)")
     args = parser.parse_args()
     repeat = 3 if args.quick else 7
     rng = np.random.default_rng(0)
@@ -194,6 +207,10 @@ def main() -> None:
     jerk_limited_profile(np.zeros(2), np.ones(2), 1.0, 1.0, 1.0)
     print(load())
     print(f"  {'':38} {'armkit':>28}   {'reference':26} {'':>28}   ratio [per round]")
+    if args.profiles:
+        profiles(rng, 1000, repeat)
+        print(load())
+        return
     splines(rng, repeat)
     evaluation(rng, 100_000 if args.quick else 1_000_000, repeat)
     profiles(rng, 1000, repeat)

@@ -281,9 +281,8 @@ def test_each_criterion_picks_its_best(criterion):
     result = ik(robot, T, np.zeros(6), criterion=criterion)
     assert result.criterion == criterion
     sols = ik_solutions(robot, T)
-    valid = sols.q[sols.within_limits]
-    from armkit.kinematics.ik.choose import fold_into_limits, scores
-    valid = fold_into_limits(robot, valid, np.zeros_like(valid))
+    valid = sols.q[sols.within_limits]              # folded into the limits nearest 0
+    from armkit.kinematics.ik.choose import scores
     best = valid[np.argmin(scores(robot, valid[None], np.zeros((1, 6)), criterion, None)[0])]
     assert same_angles(robot, result.q, best)
 

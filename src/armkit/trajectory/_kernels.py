@@ -191,9 +191,9 @@ def _phases(kind, D, sign, tj, ta, tv, times, values):
     v = D / (ta + tv) if ta + tv > 0.0 else 0.0
     a = v / (ta - tj) if ta - tj > 0.0 else 0.0
     if kind == 2:
-        _put(times, values, 0, ta, sign * a)
-        _put(times, values, 1, tv, 0.0)
-        _put(times, values, 2, ta, -sign * a)
+        # A loop, not three calls with constant k: numba would compile _put once per constant.
+        for k, (duration, top) in enumerate(((ta, sign * a), (tv, 0.0), (ta, -sign * a))):
+            _put(times, values, k, duration, top)
         return
     j = sign * a / tj if tj > 0.0 else 0.0
     for k, (duration, top) in enumerate(((tj, j), (ta - 2.0 * tj, 0.0), (tj, -j), (tv, 0.0),
@@ -210,13 +210,19 @@ def _put(times, values, k, duration, top):
 
 
 @_jit
-def _timing(kind, q0, qf, V, A, J, phase, times, values):
+def profile_timing(kind, problem, phase, times, values):
     """Phases of every joint of every problem p; kind 2 trapezoid, 3 double S.
+
+    problem (5, P, n): q0, qf, V, A, J stacked (a trapezoid's J is unused, any positive
+    value); out: times (P, n, K + 1), the start of each phase and the end, and values (P, n, K),
+    the signed top derivative of each phase (K = 3 or 7). Returns 0, or the first bad input:
+    1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit. One problem is a batch of one.
 
     With phase sync, one shape over a unit distance under the tightest limit per unit distance,
     scaled by each joint's distance; with time sync, the slowest joint's shortest duration for
     every joint.
     """
+    q0, qf, V, A, J = problem[0], problem[1], problem[2], problem[3], problem[4]
     P, n = q0.shape
     for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
         for j in range(n):
@@ -271,16 +277,6 @@ def _timing(kind, q0, qf, V, A, J, phase, times, values):
     return 0
 
 
-def profile_phases(kind: int, q0: np.ndarray, qf: np.ndarray, V: np.ndarray, A: np.ndarray,
-                   J: np.ndarray, phase: bool) -> tuple[np.ndarray, np.ndarray, int]:
-    """Phase times (P, n, K + 1) and top derivatives (P, n, K) for q0 ... J of shape (P, n),
-    and 0, or the first bad input: 1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit."""
-    P, n = q0.shape
-    K = 3 if kind == 2 else 7
-    times, values = np.empty((P, n, K + 1)), np.empty((P, n, K))
-    return times, values, _timing(kind, q0, qf, V, A, J, phase, times, values)
-
-
 @_jit
 def profile_pieces(order, times, values, q0, tol):
     """One problem's profile as one piecewise polynomial: breaks (m + 1,) merged over the
@@ -290,7 +286,19 @@ def profile_pieces(order, times, values, q0, tol):
     n, P = values.shape
     start, end = times[0, 0], times[0, P]
     eps = tol * (end - start)
-    inner = np.sort(times[:, 1:P].copy().reshape(-1))
+    # The joints' inner phase times, sorted by insertion (a few dozen: cheaper to compile than
+    # np.sort, whose quicksort is eight more functions for numba to build on a first call).
+    inner = np.empty(n * (P - 1))
+    count = 0
+    for j in range(n):
+        for k in range(1, P):
+            t = times[j, k]
+            i = count
+            while i > 0 and inner[i - 1] > t:
+                inner[i] = inner[i - 1]
+                i -= 1
+            inner[i] = t
+            count += 1
     breaks = np.empty(inner.shape[0] + 2)
     breaks[0] = start
     m = 1

@@ -9,6 +9,7 @@ that a trajectory known only by its samples (a Cartesian line through IK) fits i
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -73,20 +74,24 @@ class Trajectory:
     label: str = ""
 
     def __post_init__(self):
-        breaks, coefficients = frozen_array(self.breaks), frozen_array(self.coefficients)
+        breaks, coefficients = _frozen(self.breaks), _frozen(self.coefficients)
         if breaks.ndim != 1 or breaks.shape[0] < 2:
             raise InputError(f"breaks: expected shape (m + 1,) with m >= 1, found {breaks.shape}")
         if coefficients.ndim != 3 or coefficients.shape[0] != breaks.shape[0] - 1:
             raise InputError(f"coefficients: expected shape ({breaks.shape[0] - 1}, K, n), "
                              f"found {coefficients.shape}")
-        if not (np.isfinite(breaks).all() and np.isfinite(coefficients).all()):
+        # A finite sum has no NaN or inf in it (the cheap test for a few pieces); a sum that
+        # is not finite may still be an overflow of finite values, so look again.
+        if not (math.isfinite(breaks.sum()) and math.isfinite(coefficients.sum())) and not (
+                np.isfinite(breaks).all() and np.isfinite(coefficients).all()):
             raise InputError("trajectory: expected finite breaks and coefficients, found NaN or "
                              "inf")
-        resting = breaks.shape[0] == 2 and breaks[0] == breaks[1]      # see `at_rest`
-        if not ((np.diff(breaks) > 0).all() or resting):
+        m = breaks.shape[0] - 1
+        resting = m == 1 and breaks[0] == breaks[1]                     # see `at_rest`
+        if not ((breaks[1:] > breaks[:-1]).all() or resting):
             raise InputError("breaks: expected strictly increasing times, found "
                              f"{np.array2string(breaks, threshold=8)}")
-        knots = breaks[[0, -1]] if self.knots is None else frozen_array(self.knots)
+        knots = breaks[::m] if self.knots is None else frozen_array(self.knots)
         object.__setattr__(self, "breaks", breaks)
         object.__setattr__(self, "coefficients", coefficients)
         object.__setattr__(self, "knots", knots)
@@ -208,6 +213,16 @@ class Trajectory:
         ndarray, shape (m, S, n)
         """
         return piece_values(self.coefficients, np.asarray(tau, dtype=float), derivative)
+
+
+def _frozen(a: ArrayLike) -> NDArray:
+    """`frozen_array`, without its copy for a float array that is read-only and is no view of
+    another array or buffer (a builder's fresh kernel output, frozen by the builder: nothing
+    else can write to it)."""
+    if (type(a) is np.ndarray and a.dtype == np.float64 and not a.flags.writeable
+            and not isinstance(a.base, (np.ndarray, memoryview, bytes, bytearray))):
+        return a
+    return frozen_array(a)
 
 
 def at_rest(q: ArrayLike, label: str = "") -> Trajectory:

@@ -41,7 +41,7 @@ class Profile:
     Attributes
     ----------
     duration : ndarray, shape (...)
-        s; the same for every joint of a problem.
+        s; the same for every joint of a problem (a NumPy scalar for one problem).
     times : ndarray, shape (..., n, P + 1)
         Start of each phase and the end, from 0 to duration (phases may have zero length).
     values : ndarray, shape (..., n, P)
@@ -88,8 +88,7 @@ def trapezoidal_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Arr
     Profile
         ``order`` 2: phases accelerate, cruise, decelerate.
     """
-    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax)])
-    return _profile(2, arrays, ("vmax", "amax"), sync)
+    return _profile(2, q0, qf, vmax, amax, 1.0, sync)
 
 
 def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -117,8 +116,7 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     >>> p.duration.shape
     (1000,)
     """
-    arrays = _problem(q0, qf, [("vmax", vmax), ("amax", amax), ("jmax", jmax)])
-    return _profile(3, arrays, ("vmax", "amax", "jmax"), sync)
+    return _profile(3, q0, qf, vmax, amax, jmax, sync)
 
 
 def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
@@ -180,22 +178,47 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     breaks, c = _kernels.profile_pieces(profile.order, np.ascontiguousarray(profile.times),
                                         np.ascontiguousarray(profile.values),
                                         np.ascontiguousarray(profile.q0, dtype=float), 1e-12)
+    breaks.setflags(write=False)                # fresh and ours: the Trajectory keeps them
+    c.setflags(write=False)
     return Trajectory(breaks, c, label=label)
 
 
-def _problem(q0: ArrayLike, qf: ArrayLike, lims: list[tuple[str, ArrayLike]]) -> NDArray:
-    """q0, qf and the limits stacked into one float array (k, ..., n), each broadcast to the
-    problems' shape (one allocation: a single problem costs little more than the kernel); the
-    kernel checks the values."""
-    raw = [q0, qf] + [v for _, v in lims]
+def _one_problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+                 jmax: ArrayLike) -> NDArray | None:
+    """One problem, q0 and qf arrays (n,) with limits that are numbers or (n,), stacked as
+    (5, 1, n) without asking NumPy to broadcast the shapes first; None for anything else."""
+    if not (type(q0) is np.ndarray and type(qf) is np.ndarray and q0.ndim == 1
+            and q0.shape == qf.shape and q0.shape[0] > 0):
+        return None
+    shape = q0.shape
+    if (type(vmax) is np.ndarray and type(amax) is np.ndarray and type(jmax) is np.ndarray
+            and vmax.shape == amax.shape == jmax.shape == shape):
+        return np.array((q0, qf, vmax, amax, jmax), dtype=float).reshape(5, 1, shape[0])
+    stacked = np.empty((5, 1, shape[0]))
+    try:
+        stacked[0, 0] = q0
+        stacked[1, 0] = qf
+        stacked[2, 0] = vmax
+        stacked[3, 0] = amax
+        stacked[4, 0] = jmax
+    except (TypeError, ValueError):
+        return None                             # a limit of another shape: the general way
+    return stacked
+
+
+def _problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+             jmax: ArrayLike) -> NDArray:
+    """q0, qf and the limits stacked into one float array (5, ..., n), each broadcast to the
+    problems' shape (one allocation; the kernel checks the values)."""
+    raw = (q0, qf, vmax, amax, jmax)
     try:
         shape = np.broadcast_shapes(*(np.shape(x) for x in raw))
-        stacked = np.empty((len(raw),) + shape)
+        stacked = np.empty((5,) + shape)
         for row, x in zip(stacked, raw):
             row[...] = x
     except (TypeError, ValueError):
         raise InputError(f"q0, qf, limits: expected numbers of shapes that broadcast to "
-                         f"(..., n), found {[np.shape(x) for x in raw]}") from None
+                         f"(..., n), found {[np.shape(x) for x in raw[:4]]}") from None
     if not shape:
         raise InputError("q0, qf: expected shape (..., n), found scalars")
     return stacked
@@ -209,22 +232,37 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
     return a, b
 
 
-def _profile(order: int, arrays: NDArray, names: tuple[str, ...], sync: str) -> Profile:
-    """Run the kernel on q0, qf, vmax, amax(, jmax) stacked as (k, ..., n)."""
-    if sync not in ("time", "phase"):
+def _profile(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+             jmax: ArrayLike, sync: str) -> Profile:
+    """Run the timing kernel on the problems (a trapezoid's jmax is 1.0, unused). One problem
+    is a batch of one, with as few steps in Python around the kernel as it takes."""
+    if sync != "time" and sync != "phase":
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
-    shape, n = arrays.shape[1:], arrays.shape[-1]
-    flat = arrays.reshape(arrays.shape[0], -1, n)
-    jerk = flat[4] if order == 3 else np.ones_like(flat[0])    # a trapezoid's unused jerk
-    times, values, bad = _kernels.profile_phases(order, flat[0], flat[1], flat[2], flat[3], jerk,
-                                                 sync == "phase")
+    K = 3 if order == 2 else 7
+    one = _one_problem(q0, qf, vmax, amax, jmax)
+    if one is not None:
+        n = one.shape[2]
+        times, values = np.empty((1, n, K + 1)), np.empty((1, n, K))
+        bad = _kernels.profile_timing(order, one, sync == "phase", times, values)
+        if bad:
+            _refuse(bad, order, one)
+        times = times[0]
+        return Profile(times[0, -1], times, values[0], order, one[0, 0], one[1, 0])
+    arrays = _problem(q0, qf, vmax, amax, jmax)
+    lead, n = arrays.shape[1:], arrays.shape[-1]
+    times, values = np.empty(lead + (K + 1,)), np.empty(lead + (K,))
+    bad = _kernels.profile_timing(order, arrays.reshape(5, -1, n), sync == "phase",
+                                  times.reshape(-1, n, K + 1), values.reshape(-1, n, K))
+    if bad:
+        _refuse(bad, order, arrays)
+    return Profile(times[..., 0, -1].copy(), times, values, order, arrays[0], arrays[1])
+
+
+def _refuse(bad: int, order: int, arrays: NDArray) -> None:
+    """Raise for the kernel's first bad input (1 q0 or qf, 2 vmax, 3 amax, 4 jmax)."""
     if bad == 1:
         raise InputError("q0, qf: expected finite joint values, found NaN or inf")
-    if bad:
-        name = names[bad - 2]
-        finite = "" if name == "vmax" or (name == "amax" and order == 3) else " finite"
-        raise InputError(f"{name}: expected positive{finite} limits, found "
-                         f"{np.unique(arrays[bad]).tolist()}")
-    times = times.reshape(shape + times.shape[-1:])
-    return Profile(times[..., 0, -1].copy(), times, values.reshape(shape + values.shape[-1:]),
-                   order, arrays[0], arrays[1])
+    name = ("vmax", "amax", "jmax")[bad - 2]
+    finite = "" if name == "vmax" or (name == "amax" and order == 3) else " finite"
+    raise InputError(f"{name}: expected positive{finite} limits, found "
+                     f"{np.unique(arrays[bad]).tolist()}")

@@ -1,4 +1,5 @@
-"""Choosing among solutions: folding angles into the limits, and the criteria for the best."""
+"""Choosing among solutions: the criteria for the best (the closed-form kernels fold angles into
+the limits and check them: `armkit.kinematics.ik.analytic`)."""
 
 from __future__ import annotations
 
@@ -13,29 +14,6 @@ CRITERIA = {
     "manipulability": "largest manipulability (Yoshikawa), farthest from singularities",
     "limits": "farthest from the joint limits (smallest margin over range, largest)",
 }
-
-
-def fold_into_limits(robot: Robot, q: NDArray, q_ref: NDArray) -> NDArray:
-    """Revolute angles moved by whole turns into the limits, nearest q_ref; (..., n).
-
-    Tries the turn nearest q_ref and its two neighbours (enough for ranges up to four turns);
-    an angle with none of them inside its limits is left as it is (and fails the limit check).
-    """
-    turn = 2 * np.pi
-    nearest = q + turn * np.round((q_ref - q) / turn)
-    out, gap = q.copy(), np.full(q.shape, np.inf)
-    for shift in (0.0, -turn, turn):
-        c = nearest + shift
-        take = (robot.chain.revolute & (c >= robot.lower) & (c <= robot.upper)
-                & (np.abs(c - q_ref) < gap))
-        out = np.where(take, c, out)
-        gap = np.where(take, np.abs(c - q_ref), gap)
-    return out
-
-
-def within_limits(robot: Robot, q: NDArray, slack: float = 1e-12) -> NDArray:
-    """Whether each configuration (..., n) is inside the joint limits; (...,)."""
-    return np.all((q >= robot.lower - slack) & (q <= robot.upper + slack), axis=-1)
 
 
 def scores(robot: Robot, q: NDArray, q_ref: NDArray, criterion: str,

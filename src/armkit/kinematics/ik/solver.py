@@ -18,11 +18,11 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.errors import InputError
 from armkit.kinematics import _kernels
 from armkit.kinematics.ik import analytic, numeric
-from armkit.kinematics.ik.choose import CRITERIA, fold_into_limits, scores, within_limits
+from armkit.kinematics.ik.choose import CRITERIA, scores
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
                                           not_converged)
 from armkit.kinematics.ik.seeds import SeedBank
-from armkit.kinematics.ik.task import as_mask, mask_name, task_errors
+from armkit.kinematics.ik.task import as_mask, mask_name
 from armkit.kinematics.jacobian import pose_and_jacobian
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
@@ -241,6 +241,8 @@ class IKSolver:
         `reach_bound` of the robot, m.
     default_mask : ndarray of bool, (6,)
         The task solved when none is given.
+    default_name : str
+        Its name (`armkit.kinematics.ik.task.mask_name`).
 
     Notes
     -----
@@ -269,16 +271,16 @@ class IKSolver:
                 raise InputError(f"{name}: expected a whole number >= {low}, found {value!r}")
         object.__setattr__(self, "robot", robot)
         object.__setattr__(self, "family", analytic.family_of(robot.chain))
-        object.__setattr__(self, "reach", reach_bound(robot))
         object.__setattr__(self, "default_mask", default_mask(robot, self.family))
         self.default_mask.setflags(write=False)
-        object.__setattr__(self, "_kernel", numeric.KernelArgs.of(robot))
+        object.__setattr__(self, "default_name", mask_name(self.default_mask))
+        object.__setattr__(self, "_reach", None)
+        object.__setattr__(self, "_kernel_args", None)
         object.__setattr__(self, "_samples", int(samples))
         object.__setattr__(self, "_seed", int(seed))
         object.__setattr__(self, "_threads", threads)
         object.__setattr__(self, "_bank", None)
-        object.__setattr__(self, "_mid", 0.5 * (robot.chain.sampling_limits[0]
-                                                + robot.chain.sampling_limits[1]))
+        object.__setattr__(self, "_middle", None)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"IKSolver is immutable: cannot set {name}")
@@ -286,6 +288,29 @@ class IKSolver:
     def __repr__(self) -> str:
         family = self.family.name if self.family else "none"
         return f"IKSolver({self.robot.name}, closed form: {family}, reach {self.reach:.4g} m)"
+
+    @property
+    def reach(self) -> float:
+        """`reach_bound` of the robot, m (computed on first use: a closed form does not need
+        it)."""
+        if self._reach is None:
+            object.__setattr__(self, "_reach", reach_bound(self.robot))
+        return self._reach
+
+    @property
+    def _mid(self) -> NDArray:
+        """The middle of the sampling limits (n,): q_ref when no q0 is given (on first use)."""
+        if self._middle is None:
+            low, high = self.robot.chain.sampling_limits
+            object.__setattr__(self, "_middle", 0.5 * (low + high))
+        return self._middle
+
+    @property
+    def _kernel(self) -> numeric.KernelArgs:
+        """The numeric solver's kernel arrays (built on first use)."""
+        if self._kernel_args is None:
+            object.__setattr__(self, "_kernel_args", numeric.KernelArgs.of(self.robot))
+        return self._kernel_args
 
     @property
     def bank(self) -> SeedBank | None:
@@ -521,14 +546,11 @@ class IKSolver:
 
     def _candidates(self, T, q_ref, mask, tol_position, tol_rotation, family):
         """Every branch (N, K, n) folded into the limits near q_ref, with real (N, K), errors,
-        reached and inside (N, K) by forward kinematics."""
-        robot = self.robot
-        C = analytic.candidates(robot.chain, family, T)
-        real = np.isfinite(C).all(axis=-1)
-        C = fold_into_limits(robot, np.where(real[..., None], C, 0.0), q_ref[:, None, :])
-        pe, re = task_errors(self._poses(C), T[:, None], mask)
-        reached = real & (pe < tol_position) & (re < tol_rotation)
-        return C, real, pe, re, reached, within_limits(robot, C)
+        reached and inside (N, K) by forward kinematics (one kernel: `analytic.candidates`)."""
+        C, errors, flags = analytic.candidates(self.robot.chain, family, T, q_ref, mask,
+                                               tol_position, tol_rotation)
+        return (C, flags[..., 0], errors[..., 0], errors[..., 1], flags[..., 1],
+                flags[..., 2])
 
     def _poses(self, Q: NDArray) -> NDArray:
         """Tool poses (..., 4, 4) of Q (..., n) by the serial FK loop: checking candidates is
@@ -642,32 +664,34 @@ class IKSolver:
                              f"and three pitches, three parallel joints and a wrist, or a "
                              f"spherical wrist), found {self.robot.name}, which only the "
                              f"numeric solvers serve")
-        T = as_transform(targets, "target")
-        lead = T.shape[:-2]
+        T = _pose_fast(targets)
+        lead = ()
+        if T is None:
+            T = as_transform(targets, "target")
+            lead = T.shape[:-2]
         flat = T.reshape(-1, 4, 4)
-        mask = np.array(family.mask, bool) if mask is None else as_mask(mask)
+        mask = self.default_mask if mask is None else as_mask(mask)
+        name = self.default_name if mask is self.default_mask else mask_name(mask)
         N, n = flat.shape[0], self.robot.n
-        C, real, pe, re, reached, inside = self._candidates(
-            flat, np.zeros((N, n)), mask, tol_position, tol_rotation, family)
-        # A branch equal to an earlier reaching one (a degenerate subproblem) is not another
-        # solution.
-        valid = reached.copy()
-        K = C.shape[1]
-        for j in range(1, K):
-            same = np.all(np.abs(C[:, :j] - C[:, j:j + 1]) <= 1e-9, axis=-1) & valid[:, :j]
-            valid[:, j] &= ~same.any(axis=1)
+        # The kernel folds angles nearest 0 and marks the valid branches: those that reach
+        # the target and differ from every earlier valid one (a degenerate subproblem gives
+        # one solution twice).
+        C, errors, flags = analytic.candidates(self.robot.chain, family, flat, np.zeros((N, n)),
+                                               mask, tol_position, tol_rotation)
+        if lead == ():
+            rows = np.flatnonzero(flags[0, :, 3])
+            k = len(rows)
+            return IKSolutions(C[0, rows], np.ones(k, dtype=bool), flags[0, rows, 2],
+                               errors[0, rows, 0], errors[0, rows, 1], k, family.name, name)
+        valid = flags[..., 3]
         order = np.argsort(~valid, axis=1, kind="stable")      # real rows first, in order
         take = lambda a: np.take_along_axis(a, order, axis=1)  # noqa: E731
         valid = take(valid)
         q = np.where(valid[..., None], np.take_along_axis(C, order[..., None], axis=1), np.nan)
-        fields = (np.where(valid, take(inside), False), np.where(valid, take(pe), np.nan),
-                  np.where(valid, take(re), np.nan))
+        fields = (np.where(valid, take(flags[..., 2]), False),
+                  np.where(valid, take(errors[..., 0]), np.nan),
+                  np.where(valid, take(errors[..., 1]), np.nan))
         count = valid.sum(axis=1)
-        name = mask_name(mask)
-        if lead == ():
-            k = int(count[0])
-            return IKSolutions(q[0, :k], valid[0, :k], fields[0][0, :k], fields[1][0, :k],
-                               fields[2][0, :k], k, family.name, name)
         shape = lambda a: a.reshape(lead + a.shape[1:])        # noqa: E731
         return IKSolutions(shape(q), shape(valid), *(shape(f) for f in fields), shape(count),
                            family.name, name)
