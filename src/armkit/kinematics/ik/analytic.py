@@ -384,10 +384,12 @@ def _fold(v, lower, upper, ref):
 
 
 @_inline
-def _check(q, T, q_ref, limits, kinds, offsets, pre, links, mask, tol, errors, flags, pose):
+def _check(q, T, q_ref, limits, chain, mask, tol, errors, flags, pose):
     """Branches q (K, n) of target T folded in place; errors (K, 2) position and rotation by
     FK; flags (K, 4): real, reached (within tol under the mask), inside the limits, and valid
-    (reached and not equal to an earlier valid branch)."""
+    (reached and not equal to an earlier valid branch). chain: the `KernelChain`'s arrays
+    (kinds, offsets, pre, links, source, scale)."""
+    kinds, offsets, pre, links, source, scale = chain
     K, n = q.shape
     for b in range(K):
         real = True
@@ -400,7 +402,7 @@ def _check(q, T, q_ref, limits, kinds, offsets, pre, links, mask, tol, errors, f
                 v = _fold(v, limits[0, j], limits[1, j], q_ref[j])
             q[b, j] = v
             inside &= limits[0, j] - 1e-12 <= v <= limits[1, j] + 1e-12
-        _kernels.pose_one(q[b], kinds, offsets, pre, links, pose)
+        _kernels.pose_one(q[b], kinds, offsets, pre, links, source, scale, pose)
         pe, re = task_errors_one(pose, T, mask)
         errors[b, 0], errors[b, 1] = pe, re
         reached = real and pe < tol[0] and re < tol[1]
@@ -415,43 +417,35 @@ def _check(q, T, q_ref, limits, kinds, offsets, pre, links, mask, tol, errors, f
 
 
 @_jit
-def _lift_swing(g, targets, q_ref, limits, kinds, offsets, pre, links, mask, tol, q, errors,
-                flags):
+def _lift_swing(g, targets, q_ref, limits, chain, mask, tol, q, errors, flags):
     pose = np.empty((4, 4))
     for i in range(targets.shape[0]):
         _lift_swing_one(g, targets[i], q[i])
-        _check(q[i], targets[i], q_ref[i], limits, kinds, offsets, pre, links, mask, tol,
-               errors[i], flags[i], pose)
+        _check(q[i], targets[i], q_ref[i], limits, chain, mask, tol, errors[i], flags[i], pose)
 
 
 @_jit
-def _yaw_pitch(g, targets, q_ref, limits, kinds, offsets, pre, links, mask, tol, q, errors,
-               flags):
+def _yaw_pitch(g, targets, q_ref, limits, chain, mask, tol, q, errors, flags):
     pose = np.empty((4, 4))
     for i in range(targets.shape[0]):
         _yaw_pitch_one(g, targets[i], q[i])
-        _check(q[i], targets[i], q_ref[i], limits, kinds, offsets, pre, links, mask, tol,
-               errors[i], flags[i], pose)
+        _check(q[i], targets[i], q_ref[i], limits, chain, mask, tol, errors[i], flags[i], pose)
 
 
 @_jit
-def _parallel_wrist(g, targets, q_ref, limits, kinds, offsets, pre, links, mask, tol, q,
-                    errors, flags):
+def _parallel_wrist(g, targets, q_ref, limits, chain, mask, tol, q, errors, flags):
     pose = np.empty((4, 4))
     for i in range(targets.shape[0]):
         _parallel_wrist_one(g, targets[i], q[i])
-        _check(q[i], targets[i], q_ref[i], limits, kinds, offsets, pre, links, mask, tol,
-               errors[i], flags[i], pose)
+        _check(q[i], targets[i], q_ref[i], limits, chain, mask, tol, errors[i], flags[i], pose)
 
 
 @_jit
-def _spherical_wrist(g, targets, q_ref, limits, kinds, offsets, pre, links, mask, tol, q,
-                     errors, flags):
+def _spherical_wrist(g, targets, q_ref, limits, chain, mask, tol, q, errors, flags):
     pose = np.empty((4, 4))
     for i in range(targets.shape[0]):
         _spherical_wrist_one(g, targets[i], q[i])
-        _check(q[i], targets[i], q_ref[i], limits, kinds, offsets, pre, links, mask, tol,
-               errors[i], flags[i], pose)
+        _check(q[i], targets[i], q_ref[i], limits, chain, mask, tol, errors[i], flags[i], pose)
 
 
 # --- recognising a family ---------------------------------------------------------------------
@@ -656,7 +650,7 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     flags = np.empty((N, K, 4), dtype=np.bool_)
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
-    family.kernel(family.geometry, targets, q_ref, family.limits, k.kinds, k.offsets, k.pre,
-                  k.links, mask.astype(np.int64), np.array([tol_position, tol_rotation]), q,
-                  errors, flags)
+    family.kernel(family.geometry, targets, q_ref, family.limits,
+                  (k.kinds, k.offsets, k.pre, k.links, k.source, k.scale), mask.astype(np.int64),
+                  np.array([tol_position, tol_rotation]), q, errors, flags)
     return q, errors, flags
