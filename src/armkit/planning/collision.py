@@ -33,13 +33,16 @@ from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import Scene, SceneKernel, scene_kernel
 
 _jit = numba.njit(cache=True, nogil=True)
+# Helpers with one call site are inlined in numba's IR (a jitted callee's code is optimised
+# again in each caller's module: a flat call tree compiles faster).
+_inline = numba.njit(cache=True, nogil=True, inline="always")
 
 GOLDEN_STEPS = 40           # bracket 0.618**40 ~ 4e-9 of the segment; its slack is subtracted
 
 
 # --- distances in an obstacle's frame (scalars, inlined) ---------------------------------------
 
-@_jit
+@_inline
 def _clamp01(x):
     return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
 
@@ -92,39 +95,42 @@ def _segment_segment(ax, ay, az, bx, by, bz, cx, cy, cz, ex, ey, ez):
 
 
 @_jit
-def _segment_box(p, d, h, ts):
-    """Distance from the segment p + t d (t in [0, 1]) to the box |x_k| <= h_k (arrays (3,));
-    ts (8,) scratch.
+def _segment_box(W, o, F, h):
+    """Distance from the segment p + t d (t in [0, 1]) to the box |x_k| <= h_k: p = W[o:o+3],
+    d = W[o+3:o+6], W[o+6:o+14] scratch, half sizes F[h:h+3].
 
     Along the segment the squared distance is a sum over axes of squared excesses, each zero or
     linear in t between the crossings of the box's face planes: a quadratic per piece.
     """
-    ts[0], ts[1] = 0.0, 1.0
+    ts = o + 6
+    W[ts], W[ts + 1] = 0.0, 1.0
     m = 2
     for k in range(3):
-        if d[k] != 0.0:
+        dk = W[o + 3 + k]
+        if dk != 0.0:
             for sgn in (-1.0, 1.0):
-                t = (sgn * h[k] - p[k]) / d[k]
+                t = (sgn * F[h + k] - W[o + k]) / dk
                 if 0.0 < t < 1.0:
-                    ts[m] = t
+                    W[ts + m] = t
                     m += 1
     for i in range(1, m):                       # insertion sort, at most 8 values
-        v, j = ts[i], i - 1
-        while j >= 0 and ts[j] > v:
-            ts[j + 1] = ts[j]
+        v, j = W[ts + i], i - 1
+        while j >= 0 and W[ts + j] > v:
+            W[ts + j + 1] = W[ts + j]
             j -= 1
-        ts[j + 1] = v
+        W[ts + j + 1] = v
     best = np.inf
     for i in range(m - 1):
-        t0, t1 = ts[i], ts[i + 1]
+        t0, t1 = W[ts + i], W[ts + i + 1]
         tm = 0.5 * (t0 + t1)
         qa, qb, qc = 0.0, 0.0, 0.0              # excess^2 = (alpha + beta t)^2 summed
         for k in range(3):
-            x = p[k] + tm * d[k]
-            if x > h[k]:
-                alpha, beta = p[k] - h[k], d[k]
-            elif x < -h[k]:
-                alpha, beta = -h[k] - p[k], -d[k]
+            pk, dk, hk = W[o + k], W[o + 3 + k], F[h + k]
+            x = pk + tm * dk
+            if x > hk:
+                alpha, beta = pk - hk, dk
+            elif x < -hk:
+                alpha, beta = -hk - pk, -dk
             else:
                 continue
             qa += beta * beta
@@ -141,7 +147,7 @@ def _segment_box(p, d, h, ts):
     return math.sqrt(max(best, 0.0))
 
 
-@_jit
+@_inline
 def _point_cylinder(x, y, z, radius, half):
     dr = max(math.sqrt(x * x + y * y) - radius, 0.0)
     dz = max(abs(z) - half, 0.0)
@@ -149,11 +155,11 @@ def _point_cylinder(x, y, z, radius, half):
 
 
 @_jit
-def _segment_cylinder(p, d, radius, half):
+def _segment_cylinder(px, py, pz, dx, dy, dz, radius, half):
     """A lower bound (within 1e-8 of the segment's length) on the distance from the segment
     p + t d to the solid cylinder of `radius` and half length `half` about z: golden-section
     search of the convex distance along the segment, minus its Lipschitz slack."""
-    length = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
     g = 0.6180339887498949
     lo, hi = 0.0, 1.0
     c, e = 1.0 - g, g
@@ -173,7 +179,7 @@ def _segment_cylinder(p, d, radius, half):
             lo, c, fc = c, e, fe
             e = lo + g * (hi - lo)
             t = e
-        f = _point_cylinder(p[0] + t * d[0], p[1] + t * d[1], p[2] + t * d[2], radius, half)
+        f = _point_cylinder(px + t * dx, py + t * dy, pz + t * dz, radius, half)
         best = min(best, f)
         if t == c:
             fc = f
@@ -182,94 +188,150 @@ def _segment_cylinder(p, d, radius, half):
     return max(best - length * (hi - lo), 0.0)
 
 
-@_jit
-def _obstacle_distance(kind, inverse, dims, a, b, p, d):
-    """Distance from the world segment a-b (3,) to one obstacle (see scene.SceneKernel);
-    p (3,), d (11,) are scratch. Negative (penetration) for spheres and capsules."""
-    for r in range(3):
-        p[r] = inverse[r, 0] * a[0] + inverse[r, 1] * a[1] + inverse[r, 2] * a[2] + inverse[r, 3]
-        d[r] = (inverse[r, 0] * b[0] + inverse[r, 1] * b[1] + inverse[r, 2] * b[2]
-                + inverse[r, 3] - p[r])
+@_inline
+def _local_distance(kind, F, h, W, o):
+    """Distance from the segment p + t d in an obstacle's frame (p = W[o:o+3], d =
+    W[o+3:o+6], W[o+6:o+14] scratch) to the obstacle of kind and dimensions F[h:h+3].
+    Negative (penetration) for spheres and capsules."""
+    px, py, pz, dx, dy, dz = W[o], W[o + 1], W[o + 2], W[o + 3], W[o + 4], W[o + 5]
     if kind == 0:
-        return _segment_box(p, d, dims, d[3:11])
+        return _segment_box(W, o, F, h)
     if kind == 1:
-        return _segment_point(p[0], p[1], p[2], p[0] + d[0], p[1] + d[1], p[2] + d[2],
-                              0.0, 0.0, 0.0) - dims[0]
+        return _segment_point(px, py, pz, px + dx, py + dy, pz + dz, 0.0, 0.0, 0.0) - F[h]
     if kind == 2:
-        return _segment_cylinder(p, d, dims[0], dims[1])
-    return _segment_segment(p[0], p[1], p[2], p[0] + d[0], p[1] + d[1], p[2] + d[2],
-                            0.0, 0.0, -dims[1], 0.0, 0.0, dims[1]) - dims[0]
+        return _segment_cylinder(px, py, pz, dx, dy, dz, F[h], F[h + 1])
+    return _segment_segment(px, py, pz, px + dx, py + dy, pz + dz, 0.0, 0.0, -F[h + 1], 0.0,
+                            0.0, F[h + 1]) - F[h]
 
 
-# --- the arm and one state ---------------------------------------------------------------------
-
-@_jit
-def _segments(q, kinds, offsets, pre, links, body, ca, cb, seg, T, L):
-    """World segments (m, 6) of the capsules at q; capsules sorted by body (-1 = fixed)."""
-    m, n = body.shape[0], q.shape[0]
-    k = 0
-    while k < m and body[k] < 0:
-        for r in range(3):
-            seg[k, r], seg[k, 3 + r] = ca[k, r], cb[k, r]
-        k += 1
+@_inline
+def _to_local(F, v, ax, ay, az, bx, by, bz, W, o):
+    """The world segment a-b in the frame whose inverse is F[v:v+12] (3, 4): p into W[o:o+3],
+    d into W[o+3:o+6]."""
     for r in range(3):
-        for c in range(4):
-            T[r, c] = pre[r, c]
-    for i in range(n):
-        v = q[i] + offsets[i]
-        if kinds[i] == 0:
-            cs, sn = math.cos(v), math.sin(v)
-            for r in range(3):
-                x, y = T[r, 0], T[r, 1]
-                T[r, 0], T[r, 1] = cs * x + sn * y, cs * y - sn * x
-        else:
-            for r in range(3):
-                T[r, 3] += v * T[r, 2]
-        while k < m and body[k] == i:
-            for r in range(3):
-                seg[k, r] = T[r, 0] * ca[k, 0] + T[r, 1] * ca[k, 1] + T[r, 2] * ca[k, 2] + T[r, 3]
-                seg[k, 3 + r] = (T[r, 0] * cb[k, 0] + T[r, 1] * cb[k, 1] + T[r, 2] * cb[k, 2]
-                                 + T[r, 3])
-            k += 1
-        if i + 1 < n:
-            for r in range(3):
-                for c in range(4):
-                    L[r, c] = T[r, 0] * links[i, 0, c] + T[r, 1] * links[i, 1, c] + \
-                        T[r, 2] * links[i, 2, c]
-                L[r, 3] += T[r, 3]
-            for r in range(3):
-                for c in range(4):
-                    T[r, c] = L[r, c]
+        i = v + 4 * r
+        pr = F[i] * ax + F[i + 1] * ay + F[i + 2] * az + F[i + 3]
+        W[o + r] = pr
+        W[o + 3 + r] = F[i] * bx + F[i + 1] * by + F[i + 2] * bz + F[i + 3] - pr
+
+
+# --- the model: one float array F and one int array I (few arguments cross numba's dispatcher) -
+#
+# I: n, m (capsules), pairs, obstacles, then kinds (n), body (m), pairs (2 per pair), obstacle
+# kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
+# frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
+# centres (o, 3), bounding radii (o). Work W: segments (m, 6), T (3, 4), L (3, 4), p, d and
+# the sort scratch (14), q (n).
+
+@_inline
+def weights_at(I):
+    """Where the displacement weights start in F."""
+    n, m = I[0], I[1]
+    return n + 12 + 12 * n + 7 * m
+
+
+@_inline
+def work_array(I):
+    """The kernels' work array W."""
+    return np.empty(6 * I[1] + 24 + 14 + I[0])
+
+
+@_inline
+def state_at(I):
+    """Where the work array holds a state q (n,)."""
+    return 6 * I[1] + 24 + 14
 
 
 @_jit
-def free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind, oinv, odims,
-                  ocenter, obound, floor, cap, seg, T, L, p, d):
-    """How far (m) every point of the arm may move from q without contact:
+def free_distance(q, F, I, W, floor, cap):
+    """How far (m) every point of the arm may move from q (n,) without contact:
     ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may move),
     returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
-    within floor. Pairs the broad phase puts beyond the best so far are skipped.
-    seg (m, 6), T, L (3, 4), p, d (3,): scratch."""
-    _segments(q, kinds, offsets, pre, links, body, ca, cb, seg, T, L)
+    within floor. Obstacles a cheap lower bound (bounding ball, then for a box the separation
+    along its axes) puts beyond the best so far are skipped. F, I: the model; W: work."""
+    n, m, npairs, nobs = I[0], I[1], I[2], I[3]
+    i_body = 4 + n
+    i_pairs = i_body + m
+    i_okind = i_pairs + 2 * npairs
+    f_links = n + 12
+    f_ca = f_links + 12 * n
+    f_cb = f_ca + 3 * m
+    f_rad = f_cb + 3 * m
+    f_inv = f_rad + m + n
+    f_dims = f_inv + 12 * nobs
+    f_cen = f_dims + 3 * nobs
+    f_bound = f_cen + 3 * nobs
+    w_T = 6 * m
+    w_L = w_T + 12
+    w_p = w_L + 12
+    # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
+    k = 0
+    while k < m and I[i_body + k] < 0:
+        for r in range(3):
+            W[6 * k + r], W[6 * k + 3 + r] = F[f_ca + 3 * k + r], F[f_cb + 3 * k + r]
+        k += 1
+    for r in range(12):
+        W[w_T + r] = F[n + r]
+    for i in range(n):
+        v = q[i] + F[i]
+        if I[4 + i] == 0:
+            cs, sn = math.cos(v), math.sin(v)
+            for r in range(3):
+                x, y = W[w_T + 4 * r], W[w_T + 4 * r + 1]
+                W[w_T + 4 * r], W[w_T + 4 * r + 1] = cs * x + sn * y, cs * y - sn * x
+        else:
+            for r in range(3):
+                W[w_T + 4 * r + 3] += v * W[w_T + 4 * r + 2]
+        while k < m and I[i_body + k] == i:
+            for r in range(3):
+                t = w_T + 4 * r
+                W[6 * k + r] = (W[t] * F[f_ca + 3 * k] + W[t + 1] * F[f_ca + 3 * k + 1]
+                                + W[t + 2] * F[f_ca + 3 * k + 2] + W[t + 3])
+                W[6 * k + 3 + r] = (W[t] * F[f_cb + 3 * k] + W[t + 1] * F[f_cb + 3 * k + 1]
+                                    + W[t + 2] * F[f_cb + 3 * k + 2] + W[t + 3])
+            k += 1
+        if i + 1 < n:
+            lk = f_links + 12 * i
+            for r in range(3):
+                t = w_T + 4 * r
+                for c in range(4):
+                    W[w_L + 4 * r + c] = (W[t] * F[lk + c] + W[t + 1] * F[lk + 4 + c]
+                                          + W[t + 2] * F[lk + 8 + c])
+                W[w_L + 4 * r + 3] += W[t + 3]
+            for r in range(12):
+                W[w_T + r] = W[w_L + r]
     best = cap
-    for s in range(pairs.shape[0]):
-        i, j = pairs[s, 0], pairs[s, 1]
-        gap = 0.5 * (_segment_segment(seg[i, 0], seg[i, 1], seg[i, 2], seg[i, 3], seg[i, 4],
-                                      seg[i, 5], seg[j, 0], seg[j, 1], seg[j, 2], seg[j, 3],
-                                      seg[j, 4], seg[j, 5]) - radius[i] - radius[j])
+    for s in range(npairs):
+        ci, cj = I[i_pairs + 2 * s], I[i_pairs + 2 * s + 1]
+        i, j = 6 * ci, 6 * cj
+        gap = 0.5 * (_segment_segment(W[i], W[i + 1], W[i + 2], W[i + 3], W[i + 4], W[i + 5],
+                                      W[j], W[j + 1], W[j + 2], W[j + 3], W[j + 4], W[j + 5])
+                     - F[f_rad + ci] - F[f_rad + cj])
         if gap < best:
             best = gap
             if best <= floor:
                 return best
-    for k in range(body.shape[0]):
-        a, b = seg[k, 0:3], seg[k, 3:6]
-        for o in range(okind.shape[0]):
-            c = ocenter[o]
-            lower = _segment_point(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]) \
-                - obound[o] - radius[k]
+    for k in range(m):
+        ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
+        bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
+        radius = F[f_rad + k]
+        for o in range(nobs):
+            c = f_cen + 3 * o
+            lower = _segment_point(ax, ay, az, bx, by, bz, F[c], F[c + 1], F[c + 2]) \
+                - F[f_bound + o] - radius
             if lower >= best:
                 continue
-            gap = _obstacle_distance(okind[o], oinv[o], odims[o], a, b, p, d) - radius[k]
+            _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
+            kind, h = I[i_okind + o], f_dims + 3 * o
+            if kind == 0:
+                apart = 0.0
+                for r in range(3):
+                    e = W[w_p + r] + W[w_p + 3 + r]
+                    apart = max(apart, min(W[w_p + r], e) - F[h + r],
+                                -F[h + r] - max(W[w_p + r], e))
+                if apart - radius >= best:
+                    continue
+            gap = _local_distance(kind, F, h, W, w_p) - radius
             if gap < best:
                 best = gap
                 if best <= floor:
@@ -278,79 +340,114 @@ def free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, ok
 
 
 @_jit
-def check(Q, weights, floor, cap, edge, kinds, offsets, pre, links, body, ca, cb, radius, pairs,
-          okind, oinv, odims, ocenter, obound, out):
-    """The one compiled entry point.
+def edge_free(qa, qb, F, I, W, floor, queue):
+    """Whether the straight joint-space edge qa -> qb (n,) is certified free, and the states
+    checked.
 
-    With edge false: `free_distance` (with floor and cap) of every row of Q (N, n) into out (N,).
-
-    With edge true: whether the straight joint-space edge Q[0] -> Q[1] is certified free, into
-    out[0] (1 or 0), and the states checked into out[1]. A piece between checked states a and b
-    on which no point of the arm moves more than D (`displacement_weights`) is certified when
-    ``f_a + f_b > D + floor`` (f: `free_distance`): a configuration a fraction t along it has
-    moved at most tD from a and (1 - t)D from b, so it keeps ``(f_a + f_b - D) / 2 > floor / 2``
-    from every obstacle. Pieces not certified are halved, breadth first (the middle, then
-    quarters, ...); the edge fails at the first state with f <= floor. Both ends are checked.
-
-    free_distance is called at one place only: the compiled code stays small.
+    A piece between checked states a and b on which no point of the arm moves more than D
+    (`displacement_weights`) is certified when ``f_a + f_b > D + floor`` (f: `free_distance`):
+    a configuration a fraction t along it has moved at most tD from a and (1 - t)D from b, so
+    it keeps ``(f_a + f_b - D) / 2 > floor / 2`` from every obstacle. Pieces not certified are
+    halved, breadth first (the middle, then quarters, ...); the edge fails at the first state
+    with f <= floor. Both ends are checked. queue (4, size): work (a larger one is made when
+    the edge needs it). free_distance is called at one place only: the code stays small.
     """
-    n = Q.shape[1]
-    seg = np.empty((body.shape[0], 6))
-    T, L, p, d = np.empty((3, 4)), np.empty((3, 4)), np.empty(3), np.empty(11)
-    q = np.empty(n)
+    n = qa.shape[0]
+    w = weights_at(I)
     total = 0.0
-    size = 1
-    if edge:
-        for i in range(n):
-            total += weights[i] * abs(Q[1, i] - Q[0, i])
-        size = 2 * int(math.ceil(total / floor)) + 8
-    t0, t1, f0, f1 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
-    head, tail, checked, fa = 0, 0, 0, 0.0
-    a_t = b_t = a_f = b_f = 0.0
+    for i in range(n):
+        total += F[w + i] * abs(qb[i] - qa[i])
+    size = 2 * int(math.ceil(total / floor)) + 8
+    if size > queue.shape[1]:
+        queue = np.empty((4, size))
+    else:
+        size = queue.shape[1]
+    at = state_at(I)
+    head, tail, checked = 0, 0, 0
+    a_t = b_t = a_f = b_f = fa = 0.0
     while True:
-        if not edge:
-            if checked == Q.shape[0]:
-                return
-            t, cap_here = 0.0, cap
-            for j in range(n):
-                q[j] = Q[checked, j]
+        if checked < 2:                         # qa, qb, then the middle of the next piece
+            t, cap = float(checked), total + floor
         else:
-            # The next state: Q[0], Q[1], then the middle of the next piece not certified.
-            if checked < 2:
-                t, cap_here = float(checked), total + floor
-            else:
-                t = -1.0
-                while head != tail:
-                    a_t, b_t, a_f, b_f = t0[head], t1[head], f0[head], f1[head]
-                    head = (head + 1) % size
-                    span = (b_t - a_t) * total
-                    if a_f + b_f <= span + floor:
-                        t, cap_here = 0.5 * (a_t + b_t), 0.5 * span + floor
-                        break
-                if t < 0.0:
-                    out[0], out[1] = 1.0, checked
-                    return
-            for j in range(n):
-                q[j] = Q[0, j] + t * (Q[1, j] - Q[0, j])
-        f = free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind,
-                          oinv, odims, ocenter, obound, floor, cap_here, seg, T, L, p, d)
+            t = -1.0
+            while head != tail:
+                a_t, b_t, a_f, b_f = queue[0, head], queue[1, head], queue[2, head], \
+                    queue[3, head]
+                head = (head + 1) % size
+                span = (b_t - a_t) * total
+                if a_f + b_f <= span + floor:
+                    t, cap = 0.5 * (a_t + b_t), 0.5 * span + floor
+                    break
+            if t < 0.0:
+                return True, checked
+        for j in range(n):
+            W[at + j] = qa[j] + t * (qb[j] - qa[j])
+        f = free_distance(W[at:at + n], F, I, W, floor, cap)
         checked += 1
-        if not edge:
-            out[checked - 1] = f
-            continue
         if f <= floor:
-            out[0], out[1] = 0.0, checked
-            return
+            return False, checked
         if checked == 1:
             fa = f
-        elif checked == 2:
-            t0[tail], t1[tail], f0[tail], f1[tail] = 0.0, 1.0, fa, f
-            tail = (tail + 1) % size
+            continue
+        if checked == 2:
+            a_t, t, a_f = 0.0, 1.0, fa
         else:
-            t0[tail], t1[tail], f0[tail], f1[tail] = a_t, t, a_f, f
+            queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
             tail = (tail + 1) % size
-            t0[tail], t1[tail], f0[tail], f1[tail] = t, b_t, f, b_f
-            tail = (tail + 1) % size
+            a_t, t, a_f, f = t, b_t, f, b_f
+        queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
+        tail = (tail + 1) % size
+
+
+@_jit
+def states_kernel(Q, F, I, floor, cap, out):
+    """`free_distance` (with floor and cap) of the states Q, flat (k * n,), into out (k,), or
+    with out empty (0,) only returned (one state, nothing written); NaN for a state with a
+    value that is not finite. Returns the last state's."""
+    W = work_array(I)
+    n = I[0]
+    f = np.nan
+    for s in range(Q.shape[0] // n):
+        q = Q[s * n:(s + 1) * n]
+        finite = True
+        for j in range(n):
+            if not math.isfinite(q[j]):
+                finite = False
+        f = free_distance(q, F, I, W, floor, cap) if finite else np.nan
+        if out.shape[0]:
+            out[s] = f
+    return f
+
+
+@_jit
+def polyline_kernel(P, F, I, floor, queue):
+    """Whether every waypoint of P (k, n) and every straight edge between consecutive ones is
+    certified free (`edge_free`; one waypoint: its state), and the states checked."""
+    W = work_array(I)
+    if P.shape[0] == 1:
+        return free_distance(P[0], F, I, W, floor, floor * 2.0) > floor, 1
+    checked = 0
+    for i in range(P.shape[0] - 1):
+        free, c = edge_free(P[i], P[i + 1], F, I, W, floor, queue)
+        checked += c
+        if not free:
+            return False, checked
+    return True, checked
+
+
+@_jit
+def obstacle_distances(kind, inverse, dims, a, b, out):
+    """Distance from the segment a-b (3,) to each obstacle: kind (o,), inverse (o, 3, 4),
+    dims (o, 3), into out (o,)."""
+    W = np.empty(14)
+    Fo = np.empty(15)
+    for o in range(kind.shape[0]):
+        for r in range(3):
+            for c in range(4):
+                Fo[4 * r + c] = inverse[o, r, c]
+            Fo[12 + r] = dims[o, r]
+        _to_local(Fo, 0, a[0], a[1], a[2], b[0], b[1], b[2], W, 0)
+        out[o] = _local_distance(kind[o], Fo, 12, W, 0)
 
 
 # --- Python side -------------------------------------------------------------------------------
@@ -370,9 +467,9 @@ def obstacle_distance(scene: Scene, a: ArrayLike, b: ArrayLike) -> NDArray:
     """
     k = scene_kernel(scene)
     a, b = np.asarray(a, float), np.asarray(b, float)
-    p, d = np.empty(3), np.empty(11)
-    return np.array([_obstacle_distance(k.kind[o], k.inverse[o], k.dims[o], a, b, p, d)
-                     for o in range(len(scene))])
+    out = np.empty(len(scene))
+    obstacle_distances(k.kind, np.ascontiguousarray(k.inverse), k.dims, a, b, out)
+    return out
 
 
 def arm_capsules(robot: Robot, geometry: ArmGeometry, q: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -410,6 +507,30 @@ def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
     return np.where(robot.chain.revolute, reach, 1.0)
 
 
+def pack_model(kinds, offsets, pre, links, body, ca, cb, radius, pairs, weights,
+               scene: SceneKernel) -> tuple[NDArray, NDArray]:
+    """The checker's arrays as one float array F and one int array I (`unpack_model`)."""
+    n, m, npairs, nobs = len(kinds), len(body), len(pairs), len(scene.kind)
+    I = np.concatenate([[n, m, npairs, nobs], kinds, body, np.reshape(pairs, -1),
+                        scene.kind]).astype(np.int64)
+    F = np.concatenate([offsets, np.reshape(pre[:3], -1), np.reshape(links[:, :3], -1),
+                        np.reshape(ca, -1), np.reshape(cb, -1), radius, weights,
+                        np.reshape(scene.inverse, -1), np.reshape(scene.dims, -1),
+                        np.reshape(scene.center, -1), scene.bound]).astype(float)
+    return F, I
+
+
+_NONE = np.empty(0)       # "one state, return it": nothing is written to it
+_NO_QUEUE = np.empty((4, 0))      # the edge test makes its own
+
+
+def _writable(a: NDArray) -> NDArray:
+    """a as a C-contiguous writable float array: the kernels' one signature (a read-only
+    array would compile them again)."""
+    a = np.ascontiguousarray(a, dtype=float)
+    return a if a.flags.writeable else a.copy()
+
+
 @dataclass(frozen=True, eq=False)
 class CollisionChecker:
     """One robot's capsules against one scene, compiled; built once, immutable.
@@ -430,8 +551,8 @@ class CollisionChecker:
     ----------
     weights : ndarray, (n,)
         The displacement bound per unit joint motion (m/rad, or 1 for prismatic joints).
-    kernel_args : tuple
-        Everything the kernels take, in their order.
+    model : (ndarray, ndarray)
+        Everything the kernels take, packed in one float and one int array (`pack_model`).
     """
 
     robot: Robot
@@ -439,7 +560,7 @@ class CollisionChecker:
     geometry: ArmGeometry | None = None
     resolution: float = 0.005
     weights: NDArray = field(init=False, repr=False)
-    kernel_args: tuple = field(init=False, repr=False)
+    model: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
         if not isinstance(self.scene, Scene):
@@ -468,16 +589,13 @@ class CollisionChecker:
             cb[row] = (T @ np.r_[geometry.b[c], 1])[:3]
         rank = np.empty(len(order), np.int64)
         rank[order] = np.arange(len(order))
-        pairs = np.ascontiguousarray(rank[geometry.self_pairs()].reshape(-1, 2))
+        pairs = rank[geometry.self_pairs()].reshape(-1, 2)
         k = self.robot.chain.kernel
-        sk: SceneKernel = scene_kernel(self.scene)
-        args = (np.ascontiguousarray(k.kinds), np.ascontiguousarray(k.offsets),
-                np.ascontiguousarray(k.pre), np.ascontiguousarray(k.links), body, ca, cb,
-                np.ascontiguousarray(geometry.radius[order]), pairs, sk.kind,
-                np.ascontiguousarray(sk.inverse), sk.dims, sk.center, sk.bound)
-        for a in args:
-            a.setflags(write=False)
-        object.__setattr__(self, "kernel_args", args)
+        F, I = pack_model(k.kinds, k.offsets, k.pre, k.links, body, ca, cb,
+                          geometry.radius[order], pairs, weights, scene_kernel(self.scene))
+        F.setflags(write=False)
+        I.setflags(write=False)
+        object.__setattr__(self, "model", (F, I))
 
     @property
     def n(self) -> int:
@@ -493,21 +611,39 @@ class CollisionChecker:
     def upper(self) -> NDArray:
         return self.robot.chain.sampling_limits[1]
 
+    def _free(self, q: NDArray, floor: float, cap: float) -> NDArray:
+        """free_distance of the states q (..., n), already a float array; (...,)."""
+        F, I = self.model
+        if q.shape == (self.n,) and q.flags.c_contiguous and q.flags.writeable:
+            # One state: nothing allocated.
+            f = states_kernel(q, F, I, floor, cap, _NONE)
+            if f != f:
+                raise InputError("q: expected finite joint values, found NaN or inf")
+            return f
+        if q.ndim == 0 or q.shape[-1] != self.n:
+            joint_array(self.robot, q)                          # raises the precise error
+        q = _writable(q)
+        out = np.empty(q.shape[:-1])
+        states_kernel(q.reshape(-1), F, I, floor, cap, out.reshape(-1))
+        if np.isnan(out).any():
+            raise InputError("q: expected finite joint values, found NaN or inf")
+        return out
+
     def clearance(self, q: ArrayLike) -> NDArray:
         """Free distance f (m) at q (..., n): the smallest gap between a capsule and an
         obstacle, or half the smallest gap between two capsules of the arm (both can move);
         (...,). <= 0 where they touch or overlap (minus the depth for spheres, capsules)."""
-        q = joint_array(self.robot, q)
-        flat = q.reshape(-1, self.n)
-        out = np.empty(flat.shape[0])
-        check(flat, self.weights, -np.inf, np.inf, False, *self.kernel_args, out)
-        return out.reshape(q.shape[:-1])
+        if not (type(q) is np.ndarray and q.dtype == np.float64):
+            q = joint_array(self.robot, q)
+        return np.asarray(self._free(q, -np.inf, np.inf))
 
     def valid(self, q: ArrayLike) -> NDArray:
         """Free distance above the resolution: the states a certified edge may end on.
         (...,) bool."""
-        q = joint_array(self.robot, q)
-        return self.valid_states(q.reshape(-1, self.n)).reshape(q.shape[:-1])
+        if not (type(q) is np.ndarray and q.dtype == np.float64):
+            q = joint_array(self.robot, q)
+        r = self.resolution
+        return self._free(q, r, r * (1 + 1e-9) + 1e-12) > r
 
     def __call__(self, q: ArrayLike) -> NDArray:
         """Same as `valid`: a checker is a validity callable on a batch of states."""
@@ -515,29 +651,41 @@ class CollisionChecker:
 
     def valid_states(self, Q: NDArray) -> NDArray:
         """`valid` for states (k, n) already checked for shape (the planners' call)."""
-        Q = np.ascontiguousarray(Q, dtype=float)
+        Q = _writable(Q)
         out = np.empty(Q.shape[0])
         r = self.resolution
-        check(Q, self.weights, r, r * (1 + 1e-9) + 1e-12, False, *self.kernel_args, out)
+        states_kernel(Q.reshape(-1), self.model[0], self.model[1], r, r * (1 + 1e-9) + 1e-12,
+                      out)
         return out > r
+
+    def queue(self) -> NDArray:
+        """Work array of the edge test, sized for any edge inside the joint limits, (4, k)."""
+        total = float(self.weights @ (self.upper - self.lower))
+        return np.empty((4, 2 * int(math.ceil(total / self.resolution)) + 8))
+
+    def polyline_free(self, path: NDArray) -> tuple[bool, int]:
+        """Whether every waypoint of path (k, n) and every edge between them is certified free
+        (no shape checks: the planners' call), and the states checked."""
+        path = _writable(path)
+        free, checked = polyline_kernel(path, self.model[0], self.model[1], self.resolution,
+                                        _NO_QUEUE)
+        return bool(free), int(checked)
 
     def interior_free(self, qa: NDArray, qb: NDArray) -> tuple[bool, int]:
         """Whether the edge qa -> qb (n,) is certified free (the planners' call; its endpoints
         are checked again), and the states checked."""
-        out = np.empty(2)
-        check(np.vstack([qa, qb]), self.weights, self.resolution, 0.0, True, *self.kernel_args,
-              out)
-        return bool(out[0]), int(out[1])
+        return self.polyline_free(np.vstack([qa, qb]))
 
     def edge_valid(self, qa: ArrayLike, qb: ArrayLike) -> tuple[bool, int]:
         """Whether the straight joint-space edge qa -> qb (n,) is certified free, endpoints
         included, and the number of states checked."""
         qa, qb = joint_array(self.robot, qa, "qa"), joint_array(self.robot, qb, "qb")
+        if qa.shape != (self.n,) or qb.shape != (self.n,):
+            raise InputError(f"qa, qb: expected one configuration each ({self.n},), found "
+                             f"{qa.shape} and {qb.shape}")
         return self.interior_free(qa, qb)
 
     def path_valid(self, path: ArrayLike) -> bool:
         """Every waypoint of path (k, n) and every edge between them certified free."""
         path = joint_array(self.robot, path, "path")
-        if not self.valid_states(path.reshape(-1, self.n)).all():
-            return False
-        return all(self.interior_free(a, b)[0] for a, b in zip(path[:-1], path[1:]))
+        return self.polyline_free(path.reshape(-1, self.n))[0]

@@ -1,0 +1,486 @@
+"""The planning loop compiled, for armkit's own `CollisionChecker`: RRT, RRT-Connect and RRT*
+and shortcutting, with the certified edge test (`collision.edge_free`) called inside the
+kernel, no Python call per state.
+
+Trees live in preallocated arrays (nodes (2, capacity, n): tree 0 grows from the start, tree 1
+from the goals in RRT-Connect), the nearest neighbour is a brute-force scan of the contiguous
+node array, and the random numbers come from a seeded splitmix64 generator whose state is an
+array: the same seed gives the same path. The kernel runs a number of iterations and returns;
+Python calls it again (growing the arrays when a tree is full) until a path is found, the
+iteration budget is spent or the time limit has passed, so the state between calls is all in
+the arrays and a path does not depend on how the iterations were split.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from armkit.planning.collision import CollisionChecker, edge_free, work_array
+
+_jit = numba.njit(cache=True, nogil=True)
+# Helpers are inlined in numba's IR: each jitted function that calls another re-optimises the
+# callee's code in its own module, so a deep call tree over the edge test compiles slowly.
+_inline = numba.njit(cache=True, nogil=True, inline="always")
+
+TRAPPED, ADVANCED, REACHED = 0, 1, 2
+RUNNING, FOUND, FULL = 0, 1, 2
+PLANNER_CODES = {"rrt": 0, "rrtconnect": 1, "rrtstar": 2}
+# Counters (int64): iterations, states checked, the tree RRT-Connect extends next, the goal
+# nodes of RRT* so far, and the path found: tree-0 node, tree-1 node or goal index.
+ITERATIONS, CHECKED, SIDE, GOAL_NODES, END_A, END_B = range(6)
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+_S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
+
+
+@_inline
+def _uniform(rng):
+    """A float in [0, 1) from the splitmix64 generator whose state is rng[0] (uint64)."""
+    s = rng[0] + _GOLDEN
+    rng[0] = s
+    z = (s ^ (s >> _S30)) * _MIX1
+    z = (z ^ (z >> _S27)) * _MIX2
+    z = z ^ (z >> _S31)
+    return float(z >> _S11) * (1.0 / 9007199254740992.0)
+
+
+@_inline
+def _sample(out, lower, upper, goals, goal_bias, rng):
+    """A uniform state inside the limits into out, or with probability goal_bias a goal."""
+    if goal_bias > 0.0 and _uniform(rng) < goal_bias:
+        g = min(int(_uniform(rng) * goals.shape[0]), goals.shape[0] - 1)
+        _copy(out, goals[g])
+    else:
+        for j in range(out.shape[0]):
+            out[j] = lower[j] + (upper[j] - lower[j]) * _uniform(rng)
+
+
+@_inline
+def _copy(dst, src):
+    """dst[:] = src, as a loop (a slice assignment compiles numba's error formatting too)."""
+    for j in range(dst.shape[0]):
+        dst[j] = src[j]
+
+
+@_inline
+def _order(keys, count, idx):
+    """idx[:count] = the indices 0 .. count - 1 sorted by keys, stable (insertion sort: the
+    lists are short)."""
+    for i in range(count):
+        v, j = keys[i], i - 1
+        while j >= 0 and keys[idx[j]] > v:
+            idx[j + 1] = idx[j]
+            j -= 1
+        idx[j + 1] = i
+
+
+@_inline
+def _distance(a, b):
+    s = 0.0
+    for j in range(a.shape[0]):
+        e = a[j] - b[j]
+        s += e * e
+    return math.sqrt(s)
+
+
+@_inline
+def _nearest(nodes, size, q):
+    best, arg = np.inf, 0
+    n = q.shape[0]
+    for i in range(size):
+        s = 0.0
+        for j in range(n):
+            e = nodes[i, j] - q[j]
+            s += e * e
+        if s < best:
+            best, arg = s, i
+    return arg
+
+
+@_inline
+def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, queue,
+            counters):
+    """One step of tree t from its node nearest to target toward it: (status, new node)."""
+    near = _nearest(nodes[t], size[t], target)
+    q_near = nodes[t, near]
+    dist = _distance(q_near, target)
+    reached = dist <= step
+    if reached:
+        _copy(q_new, target)
+    else:
+        for j in range(q_new.shape[0]):
+            q_new[j] = q_near[j] + (target[j] - q_near[j]) * (step / dist)
+    free, checked = edge_free(q_near, q_new, F, I, W, floor, queue)
+    counters[CHECKED] += checked
+    if not free:
+        return TRAPPED, -1
+    i = size[t]
+    _copy(nodes[t, i], q_new)
+    parent[t, i] = near
+    cost[t, i] = cost[t, near] + min(dist, step)
+    size[t] += 1
+    return (REACHED if reached else ADVANCED), i
+
+
+@_jit
+def grow(planner, stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes,
+         parent, cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F,
+         I):
+    """Run the planner (0 RRT, 1 RRT-Connect, 2 RRT*) until counters[ITERATIONS] reaches
+    stop; returns FOUND (counters END_A, END_B say where), RUNNING (budget of this call
+    spent) or FULL (a tree has fewer than margin free rows: grow the arrays, call again).
+
+    RRT (fixed step): done when a new node joins a goal within a step by a certified edge.
+    RRT-Connect: tree SIDE extends toward a sample, the other connects greedily toward the new
+    node; the trees swap. RRT*: each new node takes the cheapest certified parent among its
+    neighbours within the shrinking radius and rewires them through itself (costs of their
+    subtrees lowered through the child / sibling lists); it runs to stop, keeping the
+    cheapest node joined to a goal (best[0] its cost, END_A the node, END_B the goal).
+    """
+    W = work_array(I)
+    n = goals.shape[1]
+    capacity = nodes.shape[1]
+    q_rand, q_new = np.empty(n), np.empty(n)
+    star = capacity if planner == 2 else 0            # RRT*'s work arrays
+    dist = np.empty(star)
+    near_ids = np.empty(star, np.int64)
+    stack = np.empty(star, np.int64)
+    keys = np.empty(star)
+    key_ids = np.empty(star, np.int64)
+    goal_dist = np.empty(goals.shape[0])
+    goal_ids = np.empty(goals.shape[0], np.int64)
+    while counters[ITERATIONS] < stop:
+        if size[0] + margin > capacity or size[1] + margin > capacity:
+            return FULL
+        counters[ITERATIONS] += 1
+        if planner == 1:
+            a = counters[SIDE]
+            counters[SIDE] = 1 - a
+            _sample(q_rand, lower, upper, goals, 0.0, rng)
+            status, new = _extend(nodes, parent, cost, size, a, q_rand, step, q_new, F, I,
+                                  W, floor, queue, counters)
+            if status == TRAPPED:
+                continue
+            target = nodes[a, new]
+            status_b, last = ADVANCED, -1
+            while status_b == ADVANCED:
+                status_b, j = _extend(nodes, parent, cost, size, 1 - a, target, step, q_new,
+                                      F, I, W, floor, queue, counters)
+                if j >= 0:
+                    last = j
+            if status_b == REACHED:
+                counters[END_A] = new if a == 0 else last
+                counters[END_B] = last if a == 0 else new
+                return FOUND
+            continue
+        _sample(q_rand, lower, upper, goals, goal_bias, rng)
+        if planner == 0:
+            status, new = _extend(nodes, parent, cost, size, 0, q_rand, step, q_new, F, I,
+                                  W, floor, queue, counters)
+            if status == TRAPPED:
+                continue
+            q = nodes[0, new]
+            for g in range(goals.shape[0]):
+                goal_dist[g] = _distance(goals[g], q)
+            _order(goal_dist, goals.shape[0], goal_ids)
+            for s in range(goals.shape[0]):
+                g = goal_ids[s]
+                dg = goal_dist[g]
+                if dg > step:
+                    break
+                free = dg == 0.0
+                if not free:
+                    free, checked = edge_free(q, goals[g], F, I, W, floor, queue)
+                    counters[CHECKED] += checked
+                if free:
+                    counters[END_A], counters[END_B] = new, g
+                    return FOUND
+            continue
+        # RRT*
+        k = size[0]
+        near = _nearest(nodes[0], k, q_rand)
+        q_near = nodes[0, near]
+        d_near = _distance(q_near, q_rand)
+        if d_near <= step:
+            _copy(q_new, q_rand)
+        else:
+            for j in range(n):
+                q_new[j] = q_near[j] + (q_rand[j] - q_near[j]) * (step / d_near)
+        free, checked = edge_free(q_near, q_new, F, I, W, floor, queue)
+        counters[CHECKED] += checked
+        if not free:
+            continue
+        radius = min(gamma * (math.log(k + 1) / (k + 1)) ** (1.0 / n), step)
+        count = 0
+        for i in range(k):
+            dist[i] = _distance(nodes[0, i], q_new)
+            if dist[i] <= radius:
+                near_ids[count] = i
+                count += 1
+        chosen, c_new = near, cost[0, near] + dist[near]
+        for s in range(count):
+            keys[s] = cost[0, near_ids[s]] + dist[near_ids[s]]
+        _order(keys, count, key_ids)
+        for r in range(count):
+            s = key_ids[r]
+            if keys[s] >= c_new:
+                break
+            j = near_ids[s]
+            free, checked = edge_free(nodes[0, j], q_new, F, I, W, floor, queue)
+            counters[CHECKED] += checked
+            if free:
+                chosen, c_new = j, keys[s]
+                break
+        new = k
+        _copy(nodes[0, new], q_new)
+        parent[0, new], cost[0, new] = chosen, c_new
+        child[new], goal_of[new] = -1, -1
+        sibling[new] = child[chosen]
+        child[chosen] = new
+        size[0] += 1
+        for s in range(count):
+            j = near_ids[s]
+            c = c_new + dist[j]
+            if j == chosen or c >= cost[0, j]:
+                continue
+            free, checked = edge_free(q_new, nodes[0, j], F, I, W, floor, queue)
+            counters[CHECKED] += checked
+            if not free:
+                continue
+            old = parent[0, j]                      # j leaves its parent's child list
+            if child[old] == j:
+                child[old] = sibling[j]
+            else:
+                m = child[old]
+                while sibling[m] != j:
+                    m = sibling[m]
+                sibling[m] = sibling[j]
+            parent[0, j] = new
+            sibling[j] = child[new]
+            child[new] = j
+            delta = c - cost[0, j]
+            stack[0] = j                            # the subtree gets cheaper too
+            top = 1
+            while top > 0:
+                top -= 1
+                m = stack[top]
+                cost[0, m] += delta
+                m = child[m]
+                while m >= 0:
+                    stack[top] = m
+                    top += 1
+                    m = sibling[m]
+        for g in range(goals.shape[0]):
+            dg = _distance(goals[g], q_new)
+            if dg > step:
+                continue
+            free = dg == 0.0
+            if not free:
+                free, checked = edge_free(q_new, goals[g], F, I, W, floor, queue)
+                counters[CHECKED] += checked
+            if free:
+                goal_of[new] = g
+                goal_nodes[counters[GOAL_NODES]] = new
+                counters[GOAL_NODES] += 1
+                break
+        for s in range(counters[GOAL_NODES]):
+            m = goal_nodes[s]
+            c = cost[0, m] + _distance(goals[goal_of[m]], nodes[0, m])
+            if c < best[0]:
+                best[0] = c
+                counters[END_A], counters[END_B] = m, goal_of[m]
+    return RUNNING
+
+
+@_jit
+def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
+    """Random shortcuts (two points drawn along the path by arc length, joined straight where
+    the edge is certified), then greedy vertex reduction (each kept vertex joined to the
+    farthest later vertex it reaches by a certified edge). P (k, n), no repeated rows.
+    Returns the new path; states checked added to counters[0]."""
+    W = work_array(I)
+    n = P.shape[1]
+    cap = P.shape[0] + tries + 2
+    p = np.empty((cap, n))
+    k = P.shape[0]
+    for i in range(k):
+        _copy(p[i], P[i])
+    cum = np.empty(cap)
+    tmp = np.empty((cap, n))
+    a, b = np.empty(n), np.empty(n)
+    for _ in range(tries):
+        if k < 3:
+            break
+        cum[0] = 0.0
+        for i in range(1, k):
+            cum[i] = cum[i - 1] + _distance(p[i], p[i - 1])
+        f1, f2 = _uniform(rng), _uniform(rng)
+        if f1 > f2:
+            f1, f2 = f2, f1
+        i1 = _point_at(p, cum, k, f1 * cum[k - 1], a)
+        i2 = _point_at(p, cum, k, f2 * cum[k - 1], b)
+        if i1 == i2:
+            continue
+        free, checked = edge_free(a, b, F, I, W, floor, queue)
+        counters[0] += checked
+        if not free:
+            continue
+        # p[:i1 + 1], a, b, p[i2 + 1:], repeats dropped
+        m = 0
+        for i in range(i1 + 1):
+            m = _push(tmp, m, p[i])
+        m = _push(tmp, m, a)
+        m = _push(tmp, m, b)
+        for i in range(i2 + 1, k):
+            m = _push(tmp, m, p[i])
+        for i in range(m):
+            _copy(p[i], tmp[i])
+        k = m
+    out = np.empty((k, n))
+    _copy(out[0], p[0])
+    m, i = 1, 0
+    while i < k - 1:
+        for j in range(k - 1, i, -1):
+            free = j == i + 1
+            if not free:
+                free, checked = edge_free(p[i], p[j], F, I, W, floor, queue)
+                counters[0] += checked
+            if free:
+                _copy(out[m], p[j])
+                m += 1
+                i = j
+                break
+    result = np.empty((m, n))
+    for i in range(m):
+        _copy(result[i], out[i])
+    return result
+
+
+@_inline
+def _push(out, m, row):
+    """Append row to out[:m] unless it repeats out[m - 1]; the new count."""
+    if m > 0:
+        same = True
+        for j in range(row.shape[0]):
+            if out[m - 1, j] != row[j]:
+                same = False
+                break
+        if same:
+            return m
+    _copy(out[m], row)
+    return m + 1
+
+
+@_inline
+def _point_at(p, cum, k, s, out):
+    """The segment i (p[i] -> p[i + 1]) holding arc length s, and the point there into out."""
+    i = 0
+    while i < k - 2 and cum[i + 1] <= s:
+        i += 1
+    seg = cum[i + 1] - cum[i]
+    t = 0.0 if seg == 0.0 else (s - cum[i]) / seg
+    for j in range(out.shape[0]):
+        out[j] = p[i, j] + t * (p[i + 1, j] - p[i, j])
+    return i
+
+
+# --- Python side -------------------------------------------------------------------------------
+
+def rng_state(seed: int | None) -> NDArray:
+    """The generator's state (1,) uint64 from a seed (None: fresh entropy)."""
+    return np.random.SeedSequence(seed).generate_state(1, np.uint64)
+
+
+def _branch(nodes: NDArray, parent: NDArray, i: int) -> NDArray:
+    out = []
+    while i >= 0:
+        out.append(nodes[i])
+        i = parent[i]
+    return np.array(out[::-1])
+
+
+def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, planner: str, *,
+                  step: float, seed: int | None, max_iterations: int, time_limit: float,
+                  goal_bias: float = 0.05):
+    """Run a planner's compiled loop: ``(path or None, iterations, states_checked, reason)``,
+    as the Python planners of `armkit.planning.rrt`."""
+    t0 = time.perf_counter()
+    n = checker.n
+    lower = np.array(checker.lower, dtype=float)
+    upper = np.array(checker.upper, dtype=float)
+    goals = np.array(goals, dtype=float).reshape(-1, n)
+    capacity = max(1024, 2 * len(goals) + 64)
+    nodes = np.empty((2, capacity, n))
+    parent = np.full((2, capacity), -1, np.int64)
+    cost = np.zeros((2, capacity))
+    size = np.zeros(2, np.int64)
+    nodes[0, 0] = start
+    size[0] = 1
+    if planner == "rrtconnect":
+        nodes[1, :len(goals)] = goals
+        size[1] = len(goals)
+    child = np.full(capacity, -1, np.int64)
+    sibling = np.full(capacity, -1, np.int64)
+    goal_of = np.full(capacity, -1, np.int64)
+    goal_nodes = np.empty(capacity, np.int64)
+    counters = np.zeros(6, np.int64)
+    counters[END_A] = counters[END_B] = -1
+    best = np.array([np.inf])
+    rng = rng_state(seed)
+    queue = checker.queue()
+    volume = float(np.prod(upper - lower))
+    unit_ball = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
+    gamma = 2.0 * ((1 + 1 / n) * volume / unit_ball) ** (1 / n)
+    margin = int(math.ceil(float(np.linalg.norm(upper - lower)) / step)) + 4
+    code = PLANNER_CODES[planner]
+    F, I = checker.model
+    chunk = 64
+    status = RUNNING
+    while True:
+        stop = min(int(counters[ITERATIONS]) + chunk, max_iterations)
+        status = grow(code, stop, margin, step, goal_bias, gamma, checker.resolution, goals,
+                      lower, upper, nodes, parent, cost, size, child, sibling, goal_of,
+                      goal_nodes, counters, best, rng, queue, F, I)
+        if status == FOUND:
+            break
+        if status == FULL:
+            nodes = np.concatenate([nodes, np.empty_like(nodes)], axis=1)
+            parent = np.concatenate([parent, np.full_like(parent, -1)], axis=1)
+            cost = np.concatenate([cost, np.zeros_like(cost)], axis=1)
+            child, sibling, goal_of = (np.concatenate([x, np.full_like(x, -1)])
+                                       for x in (child, sibling, goal_of))
+            goal_nodes = np.concatenate([goal_nodes, np.empty_like(goal_nodes)])
+            continue
+        if counters[ITERATIONS] >= max_iterations or time.perf_counter() - t0 > time_limit:
+            break
+        chunk = min(2 * chunk, 4096)
+    iterations, checked = int(counters[ITERATIONS]), int(counters[CHECKED])
+    end_a, end_b = int(counters[END_A]), int(counters[END_B])
+    if status == FOUND and planner == "rrtconnect":
+        pa = _branch(nodes[0], parent[0], end_a)
+        pb = _branch(nodes[1], parent[1], end_b)
+        return np.vstack([pa, pb[::-1][1:]]), iterations, checked, "ok"
+    if end_a >= 0 and planner in ("rrt", "rrtstar"):
+        path = _branch(nodes[0], parent[0], end_a)
+        if not np.array_equal(path[-1], goals[end_b]):
+            path = np.vstack([path, goals[end_b]])
+        return path, iterations, checked, "ok"
+    return None, iterations, checked, (f"no path within the budget ({iterations} iterations, "
+                                       f"{time.perf_counter() - t0:.3g} s)")
+
+
+def shortcut_compiled(checker: CollisionChecker, path: NDArray, *, seed: int | None,
+                      tries: int) -> tuple[NDArray, int]:
+    """`shortcut_kernel` on a path (k, n) without repeated rows: (path, states checked)."""
+    counters = np.zeros(1, np.int64)
+    F, I = checker.model
+    out = shortcut_kernel(np.ascontiguousarray(path, dtype=float), int(tries), rng_state(seed),
+                          checker.resolution, checker.queue(), F, I, counters)
+    return out, int(counters[0])
