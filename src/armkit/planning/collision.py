@@ -220,8 +220,8 @@ def _to_local(F, v, ax, ay, az, bx, by, bz, W, o):
 # I: n, m (capsules), pairs, obstacles, then kinds (n), body (m), pairs (2 per pair), obstacle
 # kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
 # frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
-# centres (o, 3), bounding radii (o). Work W: segments (m, 6), T (3, 4), L (3, 4), p, d and
-# the sort scratch (14), q (n).
+# centres (o, 3), bounding radii (o). Work W: segments (m, 6), p, d and the sort scratch (14),
+# the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n).
 
 @_inline
 def weights_at(I):
@@ -233,19 +233,30 @@ def weights_at(I):
 @_inline
 def work_array(I):
     """The kernels' work array W."""
-    return np.empty(6 * I[1] + 24 + 14 + I[0])
+    W = np.empty(10 * I[1] + 15 + I[0])
+    W[10 * I[1] + 14] = -1.0              # no closest pair yet
+    return W
 
 
 @_inline
 def state_at(I):
     """Where the work array holds a state q (n,)."""
-    return 6 * I[1] + 24 + 14
+    return 10 * I[1] + 15
+
+
+@_inline
+def _times_link(a, b, c, d, F, lk):
+    """A row (a, b, c, d) of a frame times the link transform F[lk:lk+12] (3, 4)."""
+    return (a * F[lk] + b * F[lk + 4] + c * F[lk + 8],
+            a * F[lk + 1] + b * F[lk + 5] + c * F[lk + 9],
+            a * F[lk + 2] + b * F[lk + 6] + c * F[lk + 10],
+            a * F[lk + 3] + b * F[lk + 7] + c * F[lk + 11] + d)
 
 
 @_jit
-def free_distance(q, F, I, W, floor, cap):
-    """How far (m) every point of the arm may move from q (n,) without contact:
-    ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may move),
+def free_distance(q, base, F, I, W, floor, cap):
+    """How far (m) every point of the arm may move from the state q[base:base+n] without
+    contact: ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may move),
     returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
     within floor. Obstacles a cheap lower bound (bounding ball, then for a box the separation
     along its axes) puts beyond the best so far are skipped. F, I: the model; W: work."""
@@ -261,49 +272,59 @@ def free_distance(q, F, I, W, floor, cap):
     f_dims = f_inv + 12 * nobs
     f_cen = f_dims + 3 * nobs
     f_bound = f_cen + 3 * nobs
-    w_T = 6 * m
-    w_L = w_T + 12
-    w_p = w_L + 12
+    w_p = 6 * m
+    w_b = w_p + 14
     # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
     k = 0
     while k < m and I[i_body + k] < 0:
         for r in range(3):
             W[6 * k + r], W[6 * k + 3 + r] = F[f_ca + 3 * k + r], F[f_cb + 3 * k + r]
         k += 1
-    for r in range(12):
-        W[w_T + r] = F[n + r]
+    # The frame T (rows r0, r1, r2 of 3 x 4) in scalars: they stay in registers.
+    r00, r01, r02, r03 = F[n], F[n + 1], F[n + 2], F[n + 3]
+    r10, r11, r12, r13 = F[n + 4], F[n + 5], F[n + 6], F[n + 7]
+    r20, r21, r22, r23 = F[n + 8], F[n + 9], F[n + 10], F[n + 11]
     for i in range(n):
-        v = q[i] + F[i]
+        v = q[base + i] + F[i]
         if I[4 + i] == 0:
             cs, sn = math.cos(v), math.sin(v)
-            for r in range(3):
-                x, y = W[w_T + 4 * r], W[w_T + 4 * r + 1]
-                W[w_T + 4 * r], W[w_T + 4 * r + 1] = cs * x + sn * y, cs * y - sn * x
+            r00, r01 = cs * r00 + sn * r01, cs * r01 - sn * r00
+            r10, r11 = cs * r10 + sn * r11, cs * r11 - sn * r10
+            r20, r21 = cs * r20 + sn * r21, cs * r21 - sn * r20
         else:
-            for r in range(3):
-                W[w_T + 4 * r + 3] += v * W[w_T + 4 * r + 2]
+            r03 += v * r02
+            r13 += v * r12
+            r23 += v * r22
         while k < m and I[i_body + k] == i:
-            for r in range(3):
-                t = w_T + 4 * r
-                W[6 * k + r] = (W[t] * F[f_ca + 3 * k] + W[t + 1] * F[f_ca + 3 * k + 1]
-                                + W[t + 2] * F[f_ca + 3 * k + 2] + W[t + 3])
-                W[6 * k + 3 + r] = (W[t] * F[f_cb + 3 * k] + W[t + 1] * F[f_cb + 3 * k + 1]
-                                    + W[t + 2] * F[f_cb + 3 * k + 2] + W[t + 3])
+            for e in range(2):
+                c = f_ca + 3 * k if e == 0 else f_cb + 3 * k
+                x, y, z = F[c], F[c + 1], F[c + 2]
+                W[6 * k + 3 * e] = r00 * x + r01 * y + r02 * z + r03
+                W[6 * k + 3 * e + 1] = r10 * x + r11 * y + r12 * z + r13
+                W[6 * k + 3 * e + 2] = r20 * x + r21 * y + r22 * z + r23
             k += 1
         if i + 1 < n:
             lk = f_links + 12 * i
-            for r in range(3):
-                t = w_T + 4 * r
-                for c in range(4):
-                    W[w_L + 4 * r + c] = (W[t] * F[lk + c] + W[t + 1] * F[lk + 4 + c]
-                                          + W[t + 2] * F[lk + 8 + c])
-                W[w_L + 4 * r + 3] += W[t + 3]
-            for r in range(12):
-                W[w_T + r] = W[w_L + r]
+            r00, r01, r02, r03 = _times_link(r00, r01, r02, r03, F, lk)
+            r10, r11, r12, r13 = _times_link(r10, r11, r12, r13, F, lk)
+            r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
+    # Each capsule's bounding ball: centre and half length into W[w_b + 4k : w_b + 4k + 4].
+    for k in range(m):
+        x, y, z = W[6 * k + 3] - W[6 * k], W[6 * k + 4] - W[6 * k + 1], W[6 * k + 5] - W[6 * k + 2]
+        W[w_b + 4 * k] = W[6 * k] + 0.5 * x
+        W[w_b + 4 * k + 1] = W[6 * k + 1] + 0.5 * y
+        W[w_b + 4 * k + 2] = W[6 * k + 2] + 0.5 * z
+        W[w_b + 4 * k + 3] = 0.5 * math.sqrt(x * x + y * y + z * z) + F[f_rad + k]
     best = cap
     for s in range(npairs):
         ci, cj = I[i_pairs + 2 * s], I[i_pairs + 2 * s + 1]
         i, j = 6 * ci, 6 * cj
+        # Bounding balls at least 2 best apart: this pair cannot lower best.
+        bi, bj = w_b + 4 * ci, w_b + 4 * cj
+        x, y, z = W[bi] - W[bj], W[bi + 1] - W[bj + 1], W[bi + 2] - W[bj + 2]
+        reach = 2.0 * best + W[bi + 3] + W[bj + 3]
+        if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
+            continue
         gap = 0.5 * (_segment_segment(W[i], W[i + 1], W[i + 2], W[i + 3], W[i + 4], W[i + 5],
                                       W[j], W[j + 1], W[j + 2], W[j + 3], W[j + 4], W[j + 5])
                      - F[f_rad + ci] - F[f_rad + cj])
@@ -311,31 +332,45 @@ def free_distance(q, F, I, W, floor, cap):
             best = gap
             if best <= floor:
                 return best
-    for k in range(m):
+    # Capsule-obstacle pairs, the closest pair of the previous call first (consecutive states
+    # on an edge are alike: a small best early lets the bounds skip most other pairs).
+    witness = int(W[w_b + 4 * m])
+    for step in range(m * nobs + 1):
+        if step == 0:
+            if witness < 0 or witness >= m * nobs:
+                continue
+            pair = witness
+        else:
+            pair = step - 1
+            if pair == witness:
+                continue
+        k, o = pair // nobs, pair % nobs
         ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
         bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
         radius = F[f_rad + k]
-        for o in range(nobs):
-            c = f_cen + 3 * o
-            lower = _segment_point(ax, ay, az, bx, by, bz, F[c], F[c + 1], F[c + 2]) \
-                - F[f_bound + o] - radius
-            if lower >= best:
+        bk = w_b + 4 * k
+        # Bounding balls of capsule and obstacle at least best apart: skip.
+        c = f_cen + 3 * o
+        x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
+        reach = best + W[bk + 3] + F[f_bound + o]
+        if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
+            continue
+        _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
+        kind, h = I[i_okind + o], f_dims + 3 * o
+        if kind == 0:
+            apart = 0.0
+            for r in range(3):
+                e = W[w_p + r] + W[w_p + 3 + r]
+                apart = max(apart, min(W[w_p + r], e) - F[h + r],
+                            -F[h + r] - max(W[w_p + r], e))
+            if apart - radius >= best:
                 continue
-            _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
-            kind, h = I[i_okind + o], f_dims + 3 * o
-            if kind == 0:
-                apart = 0.0
-                for r in range(3):
-                    e = W[w_p + r] + W[w_p + 3 + r]
-                    apart = max(apart, min(W[w_p + r], e) - F[h + r],
-                                -F[h + r] - max(W[w_p + r], e))
-                if apart - radius >= best:
-                    continue
-            gap = _local_distance(kind, F, h, W, w_p) - radius
-            if gap < best:
-                best = gap
-                if best <= floor:
-                    return best
+        gap = _local_distance(kind, F, h, W, w_p) - radius
+        if gap < best:
+            best = gap
+            W[w_b + 4 * m] = pair
+            if best <= floor:
+                return best
     return best
 
 
@@ -382,7 +417,7 @@ def edge_free(qa, qb, F, I, W, floor, queue):
                 return True, checked
         for j in range(n):
             W[at + j] = qa[j] + t * (qb[j] - qa[j])
-        f = free_distance(W[at:at + n], F, I, W, floor, cap)
+        f = free_distance(W, at, F, I, W, floor, cap)
         checked += 1
         if f <= floor:
             return False, checked
@@ -408,12 +443,11 @@ def states_kernel(Q, F, I, floor, cap, out):
     n = I[0]
     f = np.nan
     for s in range(Q.shape[0] // n):
-        q = Q[s * n:(s + 1) * n]
         finite = True
-        for j in range(n):
-            if not math.isfinite(q[j]):
+        for j in range(s * n, (s + 1) * n):
+            if not math.isfinite(Q[j]):
                 finite = False
-        f = free_distance(q, F, I, W, floor, cap) if finite else np.nan
+        f = free_distance(Q, s * n, F, I, W, floor, cap) if finite else np.nan
         if out.shape[0]:
             out[s] = f
     return f
@@ -425,7 +459,7 @@ def polyline_kernel(P, F, I, floor, queue):
     certified free (`edge_free`; one waypoint: its state), and the states checked."""
     W = work_array(I)
     if P.shape[0] == 1:
-        return free_distance(P[0], F, I, W, floor, floor * 2.0) > floor, 1
+        return free_distance(P[0], 0, F, I, W, floor, floor * 2.0) > floor, 1
     checked = 0
     for i in range(P.shape[0] - 1):
         free, c = edge_free(P[i], P[i + 1], F, I, W, floor, queue)

@@ -34,6 +34,7 @@ PLANNER_CODES = {"rrt": 0, "rrtconnect": 1, "rrtstar": 2}
 # nodes of RRT* so far, and the path found: tree-0 node, tree-1 node or goal index.
 ITERATIONS, CHECKED, SIDE, GOAL_NODES, END_A, END_B = range(6)
 
+
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
@@ -321,11 +322,11 @@ def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
         cum[0] = 0.0
         for i in range(1, k):
             cum[i] = cum[i - 1] + _distance(p[i], p[i - 1])
-        f1, f2 = _uniform(rng), _uniform(rng)
-        if f1 > f2:
-            f1, f2 = f2, f1
-        i1 = _point_at(p, cum, k, f1 * cum[k - 1], a)
-        i2 = _point_at(p, cum, k, f2 * cum[k - 1], b)
+        s1, s2 = _uniform(rng) * cum[k - 1], _uniform(rng) * cum[k - 1]
+        if s1 > s2:
+            s1, s2 = s2, s1
+        i1 = _point_at(p, cum, k, s1, a)
+        i2 = _point_at(p, cum, k, s2, b)
         if i1 == i2:
             continue
         free, checked = edge_free(a, b, F, I, W, floor, queue)
@@ -343,8 +344,18 @@ def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
         for i in range(m):
             _copy(p[i], tmp[i])
         k = m
-    out = np.empty((k, n))
-    _copy(out[0], p[0])
+    m = _reduce(p, k, tmp, F, I, W, floor, queue, counters)
+    result = np.empty((m, n))
+    for i in range(m):
+        _copy(result[i], p[i])
+    return result
+
+
+@_inline
+def _reduce(p, k, tmp, F, I, W, floor, queue, counters):
+    """Greedy vertex reduction of p[:k] in place (each kept vertex joined to the farthest
+    later vertex it reaches by a certified edge); the new count."""
+    _copy(tmp[0], p[0])
     m, i = 1, 0
     while i < k - 1:
         for j in range(k - 1, i, -1):
@@ -353,14 +364,13 @@ def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
                 free, checked = edge_free(p[i], p[j], F, I, W, floor, queue)
                 counters[0] += checked
             if free:
-                _copy(out[m], p[j])
+                _copy(tmp[m], p[j])
                 m += 1
                 i = j
                 break
-    result = np.empty((m, n))
     for i in range(m):
-        _copy(result[i], out[i])
-    return result
+        _copy(p[i], tmp[i])
+    return m
 
 
 @_inline
