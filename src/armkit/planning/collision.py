@@ -402,7 +402,7 @@ def edge_free(qa, qb, F, I, W, floor, queue):
     a_t = b_t = a_f = b_f = fa = 0.0
     while True:
         if checked < 2:                         # qa, qb, then the middle of the next piece
-            t, cap = float(checked), total + floor
+            t, cap = float(checked), total + 2.0 * floor
         else:
             t = -1.0
             while head != tail:
@@ -458,11 +458,9 @@ def polyline_kernel(P, F, I, floor, queue):
     """Whether every waypoint of P (k, n) and every straight edge between consecutive ones is
     certified free (`edge_free`; one waypoint: its state), and the states checked."""
     W = work_array(I)
-    if P.shape[0] == 1:
-        return free_distance(P[0], 0, F, I, W, floor, floor * 2.0) > floor, 1
     checked = 0
-    for i in range(P.shape[0] - 1):
-        free, c = edge_free(P[i], P[i + 1], F, I, W, floor, queue)
+    for i in range(max(P.shape[0] - 1, 1)):          # one waypoint: the edge to itself
+        free, c = edge_free(P[i], P[min(i + 1, P.shape[0] - 1)], F, I, W, floor, queue)
         checked += c
         if not free:
             return False, checked
@@ -630,6 +628,9 @@ class CollisionChecker:
         F.setflags(write=False)
         I.setflags(write=False)
         object.__setattr__(self, "model", (F, I))
+        object.__setattr__(self, "_one_shape", (self.robot.n,))
+        # A verdict needs the free distance only up to just above the resolution.
+        object.__setattr__(self, "_valid_cap", res * (1 + 1e-9) + 1e-12)
 
     @property
     def n(self) -> int:
@@ -651,7 +652,7 @@ class CollisionChecker:
         if q.shape == (self.n,) and q.flags.c_contiguous and q.flags.writeable:
             # One state: nothing allocated.
             f = states_kernel(q, F, I, floor, cap, _NONE)
-            if f != f:
+            if math.isnan(f):
                 raise InputError("q: expected finite joint values, found NaN or inf")
             return f
         if q.ndim == 0 or q.shape[-1] != self.n:
@@ -674,10 +675,17 @@ class CollisionChecker:
     def valid(self, q: ArrayLike) -> NDArray:
         """Free distance above the resolution: the states a certified edge may end on.
         (...,) bool."""
+        if type(q) is np.ndarray and q.shape == self._one_shape and q.dtype == np.float64:
+            flags = q.flags
+            if flags.c_contiguous and flags.writeable:           # one state, straight in
+                F, I = self.model
+                f = states_kernel(q, F, I, self.resolution, self._valid_cap, _NONE)
+                if math.isnan(f):
+                    raise InputError("q: expected finite joint values, found NaN or inf")
+                return np.bool_(f > self.resolution)
         if not (type(q) is np.ndarray and q.dtype == np.float64):
             q = joint_array(self.robot, q)
-        r = self.resolution
-        return self._free(q, r, r * (1 + 1e-9) + 1e-12) > r
+        return self._free(q, self.resolution, self._valid_cap) > self.resolution
 
     def __call__(self, q: ArrayLike) -> NDArray:
         """Same as `valid`: a checker is a validity callable on a batch of states."""
@@ -687,10 +695,9 @@ class CollisionChecker:
         """`valid` for states (k, n) already checked for shape (the planners' call)."""
         Q = _writable(Q)
         out = np.empty(Q.shape[0])
-        r = self.resolution
-        states_kernel(Q.reshape(-1), self.model[0], self.model[1], r, r * (1 + 1e-9) + 1e-12,
-                      out)
-        return out > r
+        states_kernel(Q.reshape(-1), self.model[0], self.model[1], self.resolution,
+                      self._valid_cap, out)
+        return out > self.resolution
 
     def queue(self) -> NDArray:
         """Work array of the edge test, sized for any edge inside the joint limits, (4, k)."""

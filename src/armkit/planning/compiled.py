@@ -23,13 +23,9 @@ from numpy.typing import NDArray
 from armkit.planning.collision import CollisionChecker, edge_free, work_array
 
 _jit = numba.njit(cache=True, nogil=True)
-# Helpers are inlined in numba's IR: each jitted function that calls another re-optimises the
-# callee's code in its own module, so a deep call tree over the edge test compiles slowly.
-_inline = numba.njit(cache=True, nogil=True, inline="always")
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
 RUNNING, FOUND, FULL = 0, 1, 2
-PLANNER_CODES = {"rrt": 0, "rrtconnect": 1, "rrtstar": 2}
 # Counters (int64): iterations, states checked, the tree RRT-Connect extends next, the goal
 # nodes of RRT* so far, and the path found: tree-0 node, tree-1 node or goal index.
 ITERATIONS, CHECKED, SIDE, GOAL_NODES, END_A, END_B = range(6)
@@ -41,7 +37,7 @@ _MIX2 = np.uint64(0x94D049BB133111EB)
 _S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
 
 
-@_inline
+@_jit
 def _uniform(rng):
     """A float in [0, 1) from the splitmix64 generator whose state is rng[0] (uint64)."""
     s = rng[0] + _GOLDEN
@@ -52,7 +48,7 @@ def _uniform(rng):
     return float(z >> _S11) * (1.0 / 9007199254740992.0)
 
 
-@_inline
+@_jit
 def _sample(out, lower, upper, goals, goal_bias, rng):
     """A uniform state inside the limits into out, or with probability goal_bias a goal."""
     if goal_bias > 0.0 and _uniform(rng) < goal_bias:
@@ -63,14 +59,14 @@ def _sample(out, lower, upper, goals, goal_bias, rng):
             out[j] = lower[j] + (upper[j] - lower[j]) * _uniform(rng)
 
 
-@_inline
+@_jit
 def _copy(dst, src):
     """dst[:] = src, as a loop (a slice assignment compiles numba's error formatting too)."""
     for j in range(dst.shape[0]):
         dst[j] = src[j]
 
 
-@_inline
+@_jit
 def _order(keys, count, idx):
     """idx[:count] = the indices 0 .. count - 1 sorted by keys, stable (insertion sort: the
     lists are short)."""
@@ -82,7 +78,7 @@ def _order(keys, count, idx):
         idx[j + 1] = i
 
 
-@_inline
+@_jit
 def _distance(a, b):
     s = 0.0
     for j in range(a.shape[0]):
@@ -91,7 +87,7 @@ def _distance(a, b):
     return math.sqrt(s)
 
 
-@_inline
+@_jit
 def _nearest(nodes, size, q):
     best, arg = np.inf, 0
     n = q.shape[0]
@@ -105,7 +101,7 @@ def _nearest(nodes, size, q):
     return arg
 
 
-@_inline
+@_jit
 def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, queue,
             counters):
     """One step of tree t from its node nearest to target toward it: (status, new node)."""
@@ -130,80 +126,108 @@ def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, q
     return (REACHED if reached else ADVANCED), i
 
 
-@_jit
-def grow(planner, stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes,
-         parent, cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F,
-         I):
-    """Run the planner (0 RRT, 1 RRT-Connect, 2 RRT*) until counters[ITERATIONS] reaches
-    stop; returns FOUND (counters END_A, END_B say where), RUNNING (budget of this call
-    spent) or FULL (a tree has fewer than margin free rows: grow the arrays, call again).
+# The planners' kernels share one signature (`plan_compiled` calls one of them until it is
+# done): run until counters[ITERATIONS] reaches stop; return FOUND (counters END_A, END_B say
+# where), RUNNING (the budget of this call spent) or FULL (a tree has fewer than margin free
+# rows: grow the arrays, call again).
 
-    RRT (fixed step): done when a new node joins a goal within a step by a certified edge.
-    RRT-Connect: tree SIDE extends toward a sample, the other connects greedily toward the new
-    node; the trees swap. RRT*: each new node takes the cheapest certified parent among its
-    neighbours within the shrinking radius and rewires them through itself (costs of their
-    subtrees lowered through the child / sibling lists); it runs to stop, keeping the
-    cheapest node joined to a goal (best[0] its cost, END_A the node, END_B the goal).
-    """
+@_jit
+def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
+             cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F, I):
+    """RRT with a fixed step: toward a sample (a goal with probability goal_bias); done when a
+    new node joins a goal within a step by a certified edge (END_A the node, END_B the
+    goal)."""
     W = work_array(I)
     n = goals.shape[1]
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
-    star = capacity if planner == 2 else 0            # RRT*'s work arrays
-    dist = np.empty(star)
-    near_ids = np.empty(star, np.int64)
-    stack = np.empty(star, np.int64)
-    keys = np.empty(star)
-    key_ids = np.empty(star, np.int64)
+    start_tree = counters[SIDE] * 0                   # 0, not a literal: one _extend compiled
     goal_dist = np.empty(goals.shape[0])
     goal_ids = np.empty(goals.shape[0], np.int64)
     while counters[ITERATIONS] < stop:
         if size[0] + margin > capacity or size[1] + margin > capacity:
             return FULL
         counters[ITERATIONS] += 1
-        if planner == 1:
-            a = counters[SIDE]
-            counters[SIDE] = 1 - a
-            _sample(q_rand, lower, upper, goals, 0.0, rng)
-            status, new = _extend(nodes, parent, cost, size, a, q_rand, step, q_new, F, I,
-                                  W, floor, queue, counters)
-            if status == TRAPPED:
-                continue
-            target = nodes[a, new]
-            status_b, last = ADVANCED, -1
-            while status_b == ADVANCED:
-                status_b, j = _extend(nodes, parent, cost, size, 1 - a, target, step, q_new,
-                                      F, I, W, floor, queue, counters)
-                if j >= 0:
-                    last = j
-            if status_b == REACHED:
-                counters[END_A] = new if a == 0 else last
-                counters[END_B] = last if a == 0 else new
-                return FOUND
-            continue
         _sample(q_rand, lower, upper, goals, goal_bias, rng)
-        if planner == 0:
-            status, new = _extend(nodes, parent, cost, size, 0, q_rand, step, q_new, F, I,
-                                  W, floor, queue, counters)
-            if status == TRAPPED:
-                continue
-            q = nodes[0, new]
-            for g in range(goals.shape[0]):
-                goal_dist[g] = _distance(goals[g], q)
-            _order(goal_dist, goals.shape[0], goal_ids)
-            for s in range(goals.shape[0]):
-                g = goal_ids[s]
-                dg = goal_dist[g]
-                if dg > step:
-                    break
-                free = dg == 0.0
-                if not free:
-                    free, checked = edge_free(q, goals[g], F, I, W, floor, queue)
-                    counters[CHECKED] += checked
-                if free:
-                    counters[END_A], counters[END_B] = new, g
-                    return FOUND
+        status, new = _extend(nodes, parent, cost, size, start_tree, q_rand, step, q_new, F, I,
+                              W, floor, queue, counters)
+        if status == TRAPPED:
             continue
+        q = nodes[0, new]
+        for g in range(goals.shape[0]):
+            goal_dist[g] = _distance(goals[g], q)
+        _order(goal_dist, goals.shape[0], goal_ids)
+        for s in range(goals.shape[0]):
+            g = goal_ids[s]
+            dg = goal_dist[g]
+            if dg > step:
+                break
+            free = dg == 0.0
+            if not free:
+                free, checked = edge_free(q, goals[g], F, I, W, floor, queue)
+                counters[CHECKED] += checked
+            if free:
+                counters[END_A], counters[END_B] = new, g
+                return FOUND
+    return RUNNING
+
+
+@_jit
+def grow_connect(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
+                 cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F, I):
+    """RRT-Connect: tree SIDE extends toward a sample, the other connects greedily toward the
+    new node; the trees swap (tree 0 from the start, tree 1 from the goals; END_A and END_B
+    the nodes where they met)."""
+    W = work_array(I)
+    n = goals.shape[1]
+    capacity = nodes.shape[1]
+    q_rand, q_new = np.empty(n), np.empty(n)
+    while counters[ITERATIONS] < stop:
+        if size[0] + margin > capacity or size[1] + margin > capacity:
+            return FULL
+        counters[ITERATIONS] += 1
+        a = counters[SIDE]
+        counters[SIDE] = 1 - a
+        _sample(q_rand, lower, upper, goals, 0.0, rng)
+        status, new = _extend(nodes, parent, cost, size, a, q_rand, step, q_new, F, I,
+                              W, floor, queue, counters)
+        if status == TRAPPED:
+            continue
+        target = nodes[a, new]
+        status_b, last = ADVANCED, -1
+        while status_b == ADVANCED:
+            status_b, j = _extend(nodes, parent, cost, size, 1 - a, target, step, q_new,
+                                  F, I, W, floor, queue, counters)
+            if j >= 0:
+                last = j
+        if status_b == REACHED:
+            counters[END_A] = new if a == 0 else last
+            counters[END_B] = last if a == 0 else new
+            return FOUND
+    return RUNNING
+
+
+@_jit
+def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
+              cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F, I):
+    """RRT*: each new node takes the cheapest certified parent among its neighbours within the
+    shrinking radius and rewires them through itself (costs of their subtrees lowered through
+    the child / sibling lists); it runs to stop, keeping the cheapest node joined to a goal
+    (best[0] its cost, END_A the node, END_B the goal)."""
+    W = work_array(I)
+    n = goals.shape[1]
+    capacity = nodes.shape[1]
+    q_rand, q_new = np.empty(n), np.empty(n)
+    dist = np.empty(capacity)
+    near_ids = np.empty(capacity, np.int64)
+    stack = np.empty(capacity, np.int64)
+    keys = np.empty(capacity)
+    key_ids = np.empty(capacity, np.int64)
+    while counters[ITERATIONS] < stop:
+        if size[0] + margin > capacity or size[1] + margin > capacity:
+            return FULL
+        counters[ITERATIONS] += 1
+        _sample(q_rand, lower, upper, goals, goal_bias, rng)
         # RRT*
         k = size[0]
         near = _nearest(nodes[0], k, q_rand)
@@ -351,7 +375,7 @@ def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
     return result
 
 
-@_inline
+@_jit
 def _reduce(p, k, tmp, F, I, W, floor, queue, counters):
     """Greedy vertex reduction of p[:k] in place (each kept vertex joined to the farthest
     later vertex it reaches by a certified edge); the new count."""
@@ -373,7 +397,7 @@ def _reduce(p, k, tmp, F, I, W, floor, queue, counters):
     return m
 
 
-@_inline
+@_jit
 def _push(out, m, row):
     """Append row to out[:m] unless it repeats out[m - 1]; the new count."""
     if m > 0:
@@ -388,7 +412,7 @@ def _push(out, m, row):
     return m + 1
 
 
-@_inline
+@_jit
 def _point_at(p, cum, k, s, out):
     """The segment i (p[i] -> p[i + 1]) holding arc length s, and the point there into out."""
     i = 0
@@ -404,8 +428,15 @@ def _point_at(p, cum, k, s, out):
 # --- Python side -------------------------------------------------------------------------------
 
 def rng_state(seed: int | None) -> NDArray:
-    """The generator's state (1,) uint64 from a seed (None: fresh entropy)."""
-    return np.random.SeedSequence(seed).generate_state(1, np.uint64)
+    """The generator's state (1,) uint64 from a seed, mixed by splitmix64's finaliser (None:
+    fresh entropy)."""
+    if seed is None:
+        return np.random.SeedSequence().generate_state(1, np.uint64)
+    mask = (1 << 64) - 1
+    z = (int(seed) * 0x9E3779B97F4A7C15 + 0x632BE59BD9B4E019) & mask
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & mask
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & mask
+    return np.array([z ^ (z >> 31)], dtype=np.uint64)
 
 
 def _branch(nodes: NDArray, parent: NDArray, i: int) -> NDArray:
@@ -418,15 +449,17 @@ def _branch(nodes: NDArray, parent: NDArray, i: int) -> NDArray:
 
 def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, planner: str, *,
                   step: float, seed: int | None, max_iterations: int, time_limit: float,
-                  goal_bias: float = 0.05):
+                  goal_bias: float = 0.05, capacity: int = 1024):
     """Run a planner's compiled loop: ``(path or None, iterations, states_checked, reason)``,
-    as the Python planners of `armkit.planning.rrt`."""
+    as the Python planners of `armkit.planning.rrt`. capacity: the trees' first size (rows;
+    doubled whenever full)."""
     t0 = time.perf_counter()
     n = checker.n
     lower = np.array(checker.lower, dtype=float)
     upper = np.array(checker.upper, dtype=float)
     goals = np.array(goals, dtype=float).reshape(-1, n)
-    capacity = max(1024, 2 * len(goals) + 64)
+    margin = int(math.ceil(float(np.linalg.norm(upper - lower)) / step)) + 4
+    capacity = max(int(capacity), len(goals) + margin + 1)
     nodes = np.empty((2, capacity, n))
     parent = np.full((2, capacity), -1, np.int64)
     cost = np.zeros((2, capacity))
@@ -448,14 +481,13 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     volume = float(np.prod(upper - lower))
     unit_ball = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
     gamma = 2.0 * ((1 + 1 / n) * volume / unit_ball) ** (1 / n)
-    margin = int(math.ceil(float(np.linalg.norm(upper - lower)) / step)) + 4
-    code = PLANNER_CODES[planner]
+    grow = {"rrt": grow_rrt, "rrtconnect": grow_connect, "rrtstar": grow_star}[planner]
     F, I = checker.model
     chunk = 64
     status = RUNNING
     while True:
         stop = min(int(counters[ITERATIONS]) + chunk, max_iterations)
-        status = grow(code, stop, margin, step, goal_bias, gamma, checker.resolution, goals,
+        status = grow(stop, margin, step, goal_bias, gamma, checker.resolution, goals,
                       lower, upper, nodes, parent, cost, size, child, sibling, goal_of,
                       goal_nodes, counters, best, rng, queue, F, I)
         if status == FOUND:
