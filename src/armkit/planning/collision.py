@@ -375,9 +375,9 @@ def free_distance(q, base, F, I, W, floor, cap):
 
 
 @_jit
-def edge_free(qa, qb, F, I, W, floor, queue):
-    """Whether the straight joint-space edge qa -> qb (n,) is certified free, and the states
-    checked.
+def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
+    """Whether the straight joint-space edge qa -> qb (n,) is certified free, the states
+    checked, and the free distance found at qb (capped).
 
     A piece between checked states a and b on which no point of the arm moves more than D
     (`displacement_weights`) is certified when ``f_a + f_b > D + floor`` (f: `free_distance`):
@@ -385,7 +385,9 @@ def edge_free(qa, qb, F, I, W, floor, queue):
     it keeps ``(f_a + f_b - D) / 2 > floor / 2`` from every obstacle. Pieces not certified are
     halved, breadth first (the middle, then quarters, ...); the edge fails at the first state
     with f <= floor. Both ends are checked. queue (4, size): work (a larger one is made when
-    the edge needs it). free_distance is called at one place only: the code stays small.
+    the edge needs it). fa_known: qa's free distance when known (a tree node's: any lower
+    bound of it above floor), else any value <= floor. free_distance is called at one place
+    only: the code stays small.
     """
     n = qa.shape[0]
     w = weights_at(I)
@@ -398,11 +400,13 @@ def edge_free(qa, qb, F, I, W, floor, queue):
     else:
         size = queue.shape[1]
     at = state_at(I)
-    head, tail, checked = 0, 0, 0
-    a_t = b_t = a_f = b_f = fa = 0.0
+    head, tail, checked, stage = 0, 0, 0, 0
+    a_t = b_t = a_f = b_f = fa = fb = 0.0
+    if fa_known > floor:
+        fa, stage = fa_known, 1
     while True:
-        if checked < 2:                         # qa, qb, then the middle of the next piece
-            t, cap = float(checked), total + 2.0 * floor
+        if stage < 2:                           # qa, qb, then the middle of the next piece
+            t, cap = float(stage), total + 2.0 * floor
         else:
             t = -1.0
             while head != tail:
@@ -414,17 +418,19 @@ def edge_free(qa, qb, F, I, W, floor, queue):
                     t, cap = 0.5 * (a_t + b_t), 0.5 * span + floor
                     break
             if t < 0.0:
-                return True, checked
+                return True, checked, fb
         for j in range(n):
             W[at + j] = qa[j] + t * (qb[j] - qa[j])
         f = free_distance(W, at, F, I, W, floor, cap)
         checked += 1
+        stage += 1
         if f <= floor:
-            return False, checked
-        if checked == 1:
+            return False, checked, f
+        if stage == 1:
             fa = f
             continue
-        if checked == 2:
+        if stage == 2:
+            fb = f
             a_t, t, a_f = 0.0, 1.0, fa
         else:
             queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
@@ -460,7 +466,8 @@ def polyline_kernel(P, F, I, floor, queue):
     W = work_array(I)
     checked = 0
     for i in range(max(P.shape[0] - 1, 1)):          # one waypoint: the edge to itself
-        free, c = edge_free(P[i], P[min(i + 1, P.shape[0] - 1)], F, I, W, floor, queue)
+        free, c, _ = edge_free(P[i], P[min(i + 1, P.shape[0] - 1)], F, I, W, floor, queue,
+                               -1.0)
         checked += c
         if not free:
             return False, checked

@@ -3,7 +3,8 @@ and shortcutting, with the certified edge test (`collision.edge_free`) called in
 kernel, no Python call per state.
 
 Trees live in preallocated arrays (nodes (2, capacity, n): tree 0 grows from the start, tree 1
-from the goals in RRT-Connect), the nearest neighbour is a brute-force scan of the contiguous
+from the goals in RRT-Connect; with each node its free distance, so an edge from it does not
+check it again), the nearest neighbour is a brute-force scan of the contiguous
 node array, and the random numbers come from a seeded splitmix64 generator whose state is an
 array: the same seed gives the same path. The kernel runs a number of iterations and returns;
 Python calls it again (growing the arrays when a tree is full) until a path is found, the
@@ -102,7 +103,7 @@ def _nearest(nodes, size, q):
 
 
 @_jit
-def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, queue,
+def _extend(nodes, parent, cost, clear, size, t, target, step, q_new, F, I, W, floor, queue,
             counters):
     """One step of tree t from its node nearest to target toward it: (status, new node)."""
     near = _nearest(nodes[t], size[t], target)
@@ -114,7 +115,7 @@ def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, q
     else:
         for j in range(q_new.shape[0]):
             q_new[j] = q_near[j] + (target[j] - q_near[j]) * (step / dist)
-    free, checked = edge_free(q_near, q_new, F, I, W, floor, queue)
+    free, checked, f_new = edge_free(q_near, q_new, F, I, W, floor, queue, clear[t, near])
     counters[CHECKED] += checked
     if not free:
         return TRAPPED, -1
@@ -122,6 +123,7 @@ def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, q
     _copy(nodes[t, i], q_new)
     parent[t, i] = near
     cost[t, i] = cost[t, near] + min(dist, step)
+    clear[t, i] = f_new
     size[t] += 1
     return (REACHED if reached else ADVANCED), i
 
@@ -133,7 +135,8 @@ def _extend(nodes, parent, cost, size, t, target, step, q_new, F, I, W, floor, q
 
 @_jit
 def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
-             cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F, I):
+             cost, clear, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue,
+             F, I):
     """RRT with a fixed step: toward a sample (a goal with probability goal_bias); done when a
     new node joins a goal within a step by a certified edge (END_A the node, END_B the
     goal)."""
@@ -149,8 +152,8 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, n
             return FULL
         counters[ITERATIONS] += 1
         _sample(q_rand, lower, upper, goals, goal_bias, rng)
-        status, new = _extend(nodes, parent, cost, size, start_tree, q_rand, step, q_new, F, I,
-                              W, floor, queue, counters)
+        status, new = _extend(nodes, parent, cost, clear, size, start_tree, q_rand, step, q_new,
+                              F, I, W, floor, queue, counters)
         if status == TRAPPED:
             continue
         q = nodes[0, new]
@@ -164,7 +167,7 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, n
                 break
             free = dg == 0.0
             if not free:
-                free, checked = edge_free(q, goals[g], F, I, W, floor, queue)
+                free, checked, _ = edge_free(q, goals[g], F, I, W, floor, queue, -1.0)
                 counters[CHECKED] += checked
             if free:
                 counters[END_A], counters[END_B] = new, g
@@ -174,7 +177,8 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, n
 
 @_jit
 def grow_connect(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
-                 cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F, I):
+                 cost, clear, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue,
+                 F, I):
     """RRT-Connect: tree SIDE extends toward a sample, the other connects greedily toward the
     new node; the trees swap (tree 0 from the start, tree 1 from the goals; END_A and END_B
     the nodes where they met)."""
@@ -189,14 +193,14 @@ def grow_connect(stop, margin, step, goal_bias, gamma, floor, goals, lower, uppe
         a = counters[SIDE]
         counters[SIDE] = 1 - a
         _sample(q_rand, lower, upper, goals, 0.0, rng)
-        status, new = _extend(nodes, parent, cost, size, a, q_rand, step, q_new, F, I,
+        status, new = _extend(nodes, parent, cost, clear, size, a, q_rand, step, q_new, F, I,
                               W, floor, queue, counters)
         if status == TRAPPED:
             continue
         target = nodes[a, new]
         status_b, last = ADVANCED, -1
         while status_b == ADVANCED:
-            status_b, j = _extend(nodes, parent, cost, size, 1 - a, target, step, q_new,
+            status_b, j = _extend(nodes, parent, cost, clear, size, 1 - a, target, step, q_new,
                                   F, I, W, floor, queue, counters)
             if j >= 0:
                 last = j
@@ -209,7 +213,8 @@ def grow_connect(stop, margin, step, goal_bias, gamma, floor, goals, lower, uppe
 
 @_jit
 def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
-              cost, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue, F, I):
+              cost, clear, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue,
+              F, I):
     """RRT*: each new node takes the cheapest certified parent among its neighbours within the
     shrinking radius and rewires them through itself (costs of their subtrees lowered through
     the child / sibling lists); it runs to stop, keeping the cheapest node joined to a goal
@@ -238,7 +243,7 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
         else:
             for j in range(n):
                 q_new[j] = q_near[j] + (q_rand[j] - q_near[j]) * (step / d_near)
-        free, checked = edge_free(q_near, q_new, F, I, W, floor, queue)
+        free, checked, f_new = edge_free(q_near, q_new, F, I, W, floor, queue, clear[0, near])
         counters[CHECKED] += checked
         if not free:
             continue
@@ -258,14 +263,14 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
             if keys[s] >= c_new:
                 break
             j = near_ids[s]
-            free, checked = edge_free(nodes[0, j], q_new, F, I, W, floor, queue)
+            free, checked, _ = edge_free(nodes[0, j], q_new, F, I, W, floor, queue, -1.0)
             counters[CHECKED] += checked
             if free:
                 chosen, c_new = j, keys[s]
                 break
         new = k
         _copy(nodes[0, new], q_new)
-        parent[0, new], cost[0, new] = chosen, c_new
+        parent[0, new], cost[0, new], clear[0, new] = chosen, c_new, f_new
         child[new], goal_of[new] = -1, -1
         sibling[new] = child[chosen]
         child[chosen] = new
@@ -275,7 +280,7 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
             c = c_new + dist[j]
             if j == chosen or c >= cost[0, j]:
                 continue
-            free, checked = edge_free(q_new, nodes[0, j], F, I, W, floor, queue)
+            free, checked, _ = edge_free(q_new, nodes[0, j], F, I, W, floor, queue, -1.0)
             counters[CHECKED] += checked
             if not free:
                 continue
@@ -308,7 +313,7 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
                 continue
             free = dg == 0.0
             if not free:
-                free, checked = edge_free(q_new, goals[g], F, I, W, floor, queue)
+                free, checked, _ = edge_free(q_new, goals[g], F, I, W, floor, queue, -1.0)
                 counters[CHECKED] += checked
             if free:
                 goal_of[new] = g
@@ -353,7 +358,7 @@ def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
         i2 = _point_at(p, cum, k, s2, b)
         if i1 == i2:
             continue
-        free, checked = edge_free(a, b, F, I, W, floor, queue)
+        free, checked, _ = edge_free(a, b, F, I, W, floor, queue, -1.0)
         counters[0] += checked
         if not free:
             continue
@@ -385,7 +390,7 @@ def _reduce(p, k, tmp, F, I, W, floor, queue, counters):
         for j in range(k - 1, i, -1):
             free = j == i + 1
             if not free:
-                free, checked = edge_free(p[i], p[j], F, I, W, floor, queue)
+                free, checked, _ = edge_free(p[i], p[j], F, I, W, floor, queue, -1.0)
                 counters[0] += checked
             if free:
                 _copy(tmp[m], p[j])
@@ -463,6 +468,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     nodes = np.empty((2, capacity, n))
     parent = np.full((2, capacity), -1, np.int64)
     cost = np.zeros((2, capacity))
+    clear = np.full((2, capacity), -1.0)          # each node's free distance (capped), -1 unknown
     size = np.zeros(2, np.int64)
     nodes[0, 0] = start
     size[0] = 1
@@ -488,7 +494,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     while True:
         stop = min(int(counters[ITERATIONS]) + chunk, max_iterations)
         status = grow(stop, margin, step, goal_bias, gamma, checker.resolution, goals,
-                      lower, upper, nodes, parent, cost, size, child, sibling, goal_of,
+                      lower, upper, nodes, parent, cost, clear, size, child, sibling, goal_of,
                       goal_nodes, counters, best, rng, queue, F, I)
         if status == FOUND:
             break
@@ -496,6 +502,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
             nodes = np.concatenate([nodes, np.empty_like(nodes)], axis=1)
             parent = np.concatenate([parent, np.full_like(parent, -1)], axis=1)
             cost = np.concatenate([cost, np.zeros_like(cost)], axis=1)
+            clear = np.concatenate([clear, np.full_like(clear, -1.0)], axis=1)
             child, sibling, goal_of = (np.concatenate([x, np.full_like(x, -1)])
                                        for x in (child, sibling, goal_of))
             goal_nodes = np.concatenate([goal_nodes, np.empty_like(goal_nodes)])
