@@ -561,6 +561,7 @@ def pack_model(kinds, offsets, pre, links, body, ca, cb, radius, pairs, weights,
 
 _NONE = np.empty(0)       # "one state, return it": nothing is written to it
 _NO_QUEUE = np.empty((4, 0))      # the edge test makes its own
+QUEUE_SIZE = 1024                 # the planners' edge-test work: longer edges make their own
 
 
 def _writable(a: NDArray) -> NDArray:
@@ -705,11 +706,6 @@ class CollisionChecker:
         states_kernel(Q.reshape(-1), self.model[0], self.model[1], self.resolution,
                       self._valid_cap, out)
         return out > self.resolution
-
-    def queue(self) -> NDArray:
-        """Work array of the edge test, sized for any edge inside the joint limits, (4, k)."""
-        total = float(self.weights @ (self.upper - self.lower))
-        return np.empty((4, 2 * int(math.ceil(total / self.resolution)) + 8))
 
     def polyline_free(self, path: NDArray) -> tuple[bool, int]:
         """Whether every waypoint of path (k, n) and every edge between them is certified free

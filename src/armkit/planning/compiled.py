@@ -4,9 +4,10 @@ kernel, no Python call per state.
 
 Trees live in preallocated arrays (nodes (2, capacity, n): tree 0 grows from the start, tree 1
 from the goals in RRT-Connect; with each node its free distance, so an edge from it does not
-check it again), the nearest neighbour is a brute-force scan of the contiguous
-node array, and the random numbers come from a seeded splitmix64 generator whose state is an
-array: the same seed gives the same path. The kernel runs a number of iterations and returns;
+check it again), the nearest neighbour is a brute-force scan of the contiguous node array (a
+few hundred nodes at most on the shelf: a spatial index does not pay), and the random numbers
+come from a seeded splitmix64 generator whose state is an array: the same seed gives the same
+path. The kernel runs a number of iterations and returns;
 Python calls it again (growing the arrays when a tree is full) until a path is found, the
 iteration budget is spent or the time limit has passed, so the state between calls is all in
 the arrays and a path does not depend on how the iterations were split.
@@ -21,7 +22,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.planning.collision import CollisionChecker, edge_free, work_array
+from armkit.planning.collision import QUEUE_SIZE, CollisionChecker, edge_free, work_array
 
 _jit = numba.njit(cache=True, nogil=True)
 
@@ -483,7 +484,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     counters[END_A] = counters[END_B] = -1
     best = np.array([np.inf])
     rng = rng_state(seed)
-    queue = checker.queue()
+    queue = np.empty((4, QUEUE_SIZE))
     volume = float(np.prod(upper - lower))
     unit_ball = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
     gamma = 2.0 * ((1 + 1 / n) * volume / unit_ball) ** (1 / n)
@@ -531,5 +532,6 @@ def shortcut_compiled(checker: CollisionChecker, path: NDArray, *, seed: int | N
     counters = np.zeros(1, np.int64)
     F, I = checker.model
     out = shortcut_kernel(np.ascontiguousarray(path, dtype=float), int(tries), rng_state(seed),
-                          checker.resolution, checker.queue(), F, I, counters)
+                          checker.resolution, np.empty((4, QUEUE_SIZE)), F, I,
+                          counters)
     return out, int(counters[0])
