@@ -256,8 +256,8 @@ def _times_link(a, b, c, d, F, lk):
 @_jit
 def free_distance(q, base, F, I, W, floor, cap):
     """How far (m) every point of the arm may move from the state q[base:base+n] without
-    contact: ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may move),
-    returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
+    contact: ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may
+    move), returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
     within floor. Obstacles a cheap lower bound (bounding ball, then for a box the separation
     along its axes) puts beyond the best so far are skipped. F, I: the model; W: work."""
     n, m, npairs, nobs = I[0], I[1], I[2], I[3]
