@@ -35,7 +35,7 @@ import numpy as np
 
 import armkit
 from armkit.planning import Box, CollisionChecker, Scene, default_geometry, plan
-from armkit.planning.collision import check
+from armkit.planning.collision import states_kernel
 
 MM = 1e-3
 R = 0.005
@@ -133,22 +133,28 @@ def mmm(x, scale=1.0, fmt="{:.3g}"):
 
 
 def first_call_compile() -> str:
-    """The checker's first call in a fresh process with an empty numba cache, then with the
-    cache filled: wall time and this process's CPU time (the machine is shared)."""
-    code = ("import time; import numpy as np, armkit; "
-            "from armkit.planning import CollisionChecker, Scene, Box; "
+    """The checker's first call, then the first plan() on the shelf (RRT-Connect, shortcut),
+    in a fresh process with an empty numba cache, then with the cache filled: wall time and
+    this process's CPU time (the machine is shared)."""
+    code = ("import sys, time; import numpy as np, armkit; "
+            f"sys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r}); "
+            "from planning import shelf, SHELF, R; "
+            "from armkit.planning import CollisionChecker, default_geometry, plan; "
             "r=armkit.robot('inspection_6dof'); armkit.fk_frames(r, np.zeros((2, 6))); "
-            "c=CollisionChecker(r, Scene([Box([.1,.1,.1])]), resolution=0.005); "
+            "c=CollisionChecker(r, shelf(), default_geometry(r, 0.04), R); "
             "t=time.perf_counter(); p=time.process_time(); c.valid(np.zeros(6)); "
-            "print(f'{time.perf_counter()-t:.2f} {time.process_time()-p:.2f}')")
+            "t1=time.perf_counter(); p1=time.process_time(); plan(c, *SHELF, seed=0); "
+            "print(f'{t1-t:.2f} {p1-p:.2f} {time.perf_counter()-t1:.2f} "
+            "{time.process_time()-p1:.2f}')")
     with tempfile.TemporaryDirectory() as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache)
         cold = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                               text=True).stdout.split()
         warm = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                               text=True).stdout.split()
-    return (f"checker's first call, empty numba cache: {cold[0]} s wall, {cold[1]} s CPU; "
-            f"from the cache: {warm[0]} s wall, {warm[1]} s CPU")
+    return (f"empty numba cache: checker's first call {cold[0]} s wall, {cold[1]} s CPU; "
+            f"then the first plan() {cold[2]} s wall, {cold[3]} s CPU. From the cache: "
+            f"{warm[0]} s / {warm[1]} s and {warm[2]} s / {warm[3]} s")
 
 
 # --- checker throughput ------------------------------------------------------------------------
@@ -157,20 +163,22 @@ def checker_figures(checker, quick):
     robot, geometry, scene = checker.robot, checker.geometry, checker.scene
     Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (200_000, 6))
     out = np.empty(len(Q))
-    args, w = checker.kernel_args, checker.weights
-    check(Q[:10], w, R, R * 1.000001, False, *args, out[:10])
-    batch = rounds(lambda: check(Q, w, R, R * 1.000001, False, *args, out), 3 if quick else 5)
-    exact = rounds(lambda: check(Q, w, -np.inf, np.inf, False, *args, out), 3 if quick else 5)
+    F, I = checker.model
+    flat = Q.reshape(-1)
+    cap = R * (1 + 1e-9) + 1e-12
+    states_kernel(flat[:60], F, I, R, cap, out[:10])
+    batch = rounds(lambda: states_kernel(flat, F, I, R, cap, out), 3 if quick else 5)
+    exact = rounds(lambda: states_kernel(flat, F, I, -np.inf, np.inf, out), 3 if quick else 5)
     Qn = Q[:20_000]
     ref = numpy_free_distance(robot, geometry, scene, Qn)
-    check(Qn, w, -np.inf, np.inf, False, *args, out[:len(Qn)])
+    states_kernel(Qn.reshape(-1), F, I, -np.inf, np.inf, out[:len(Qn)])
     agree = np.abs(ref - out[:len(Qn)]).max()
     numpy_batch = rounds(lambda: numpy_free_distance(robot, geometry, scene, Qn), 3)
     single = Q[:5000]
     t_valid = rounds(lambda: [checker.valid(q) for q in single], 3) / len(single)
-    one = np.empty(1)
-    t_kernel = rounds(lambda: [check(q[None], w, R, R * 1.000001, False, *args, one)
-                               for q in single], 3) / len(single)
+    none = np.empty(0)
+    t_kernel = rounds(lambda: [states_kernel(q, F, I, R, cap, none) for q in single],
+                      3) / len(single)
     t_numpy1 = rounds(lambda: [numpy_free_distance(robot, geometry, scene, q[None])
                                for q in single[:500]], 3) / 500
     print("\n## Checker: inspection_6dof capsules against the shelf, states per second "

@@ -33,13 +33,16 @@ from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import Scene, SceneKernel, scene_kernel
 
 _jit = numba.njit(cache=True, nogil=True)
+# Helpers with one call site are inlined in numba's IR (a jitted callee's code is optimised
+# again in each caller's module: a flat call tree compiles faster).
+_inline = numba.njit(cache=True, nogil=True, inline="always")
 
 GOLDEN_STEPS = 40           # bracket 0.618**40 ~ 4e-9 of the segment; its slack is subtracted
 
 
 # --- distances in an obstacle's frame (scalars, inlined) ---------------------------------------
 
-@_jit
+@_inline
 def _clamp01(x):
     return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
 
@@ -92,39 +95,42 @@ def _segment_segment(ax, ay, az, bx, by, bz, cx, cy, cz, ex, ey, ez):
 
 
 @_jit
-def _segment_box(p, d, h, ts):
-    """Distance from the segment p + t d (t in [0, 1]) to the box |x_k| <= h_k (arrays (3,));
-    ts (8,) scratch.
+def _segment_box(W, o, F, h):
+    """Distance from the segment p + t d (t in [0, 1]) to the box |x_k| <= h_k: p = W[o:o+3],
+    d = W[o+3:o+6], W[o+6:o+14] scratch, half sizes F[h:h+3].
 
     Along the segment the squared distance is a sum over axes of squared excesses, each zero or
     linear in t between the crossings of the box's face planes: a quadratic per piece.
     """
-    ts[0], ts[1] = 0.0, 1.0
+    ts = o + 6
+    W[ts], W[ts + 1] = 0.0, 1.0
     m = 2
     for k in range(3):
-        if d[k] != 0.0:
+        dk = W[o + 3 + k]
+        if dk != 0.0:
             for sgn in (-1.0, 1.0):
-                t = (sgn * h[k] - p[k]) / d[k]
+                t = (sgn * F[h + k] - W[o + k]) / dk
                 if 0.0 < t < 1.0:
-                    ts[m] = t
+                    W[ts + m] = t
                     m += 1
     for i in range(1, m):                       # insertion sort, at most 8 values
-        v, j = ts[i], i - 1
-        while j >= 0 and ts[j] > v:
-            ts[j + 1] = ts[j]
+        v, j = W[ts + i], i - 1
+        while j >= 0 and W[ts + j] > v:
+            W[ts + j + 1] = W[ts + j]
             j -= 1
-        ts[j + 1] = v
+        W[ts + j + 1] = v
     best = np.inf
     for i in range(m - 1):
-        t0, t1 = ts[i], ts[i + 1]
+        t0, t1 = W[ts + i], W[ts + i + 1]
         tm = 0.5 * (t0 + t1)
         qa, qb, qc = 0.0, 0.0, 0.0              # excess^2 = (alpha + beta t)^2 summed
         for k in range(3):
-            x = p[k] + tm * d[k]
-            if x > h[k]:
-                alpha, beta = p[k] - h[k], d[k]
-            elif x < -h[k]:
-                alpha, beta = -h[k] - p[k], -d[k]
+            pk, dk, hk = W[o + k], W[o + 3 + k], F[h + k]
+            x = pk + tm * dk
+            if x > hk:
+                alpha, beta = pk - hk, dk
+            elif x < -hk:
+                alpha, beta = -hk - pk, -dk
             else:
                 continue
             qa += beta * beta
@@ -141,7 +147,7 @@ def _segment_box(p, d, h, ts):
     return math.sqrt(max(best, 0.0))
 
 
-@_jit
+@_inline
 def _point_cylinder(x, y, z, radius, half):
     dr = max(math.sqrt(x * x + y * y) - radius, 0.0)
     dz = max(abs(z) - half, 0.0)
@@ -149,11 +155,11 @@ def _point_cylinder(x, y, z, radius, half):
 
 
 @_jit
-def _segment_cylinder(p, d, radius, half):
+def _segment_cylinder(px, py, pz, dx, dy, dz, radius, half):
     """A lower bound (within 1e-8 of the segment's length) on the distance from the segment
     p + t d to the solid cylinder of `radius` and half length `half` about z: golden-section
     search of the convex distance along the segment, minus its Lipschitz slack."""
-    length = math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    length = math.sqrt(dx * dx + dy * dy + dz * dz)
     g = 0.6180339887498949
     lo, hi = 0.0, 1.0
     c, e = 1.0 - g, g
@@ -173,7 +179,7 @@ def _segment_cylinder(p, d, radius, half):
             lo, c, fc = c, e, fe
             e = lo + g * (hi - lo)
             t = e
-        f = _point_cylinder(p[0] + t * d[0], p[1] + t * d[1], p[2] + t * d[2], radius, half)
+        f = _point_cylinder(px + t * dx, py + t * dy, pz + t * dz, radius, half)
         best = min(best, f)
         if t == c:
             fc = f
@@ -182,175 +188,305 @@ def _segment_cylinder(p, d, radius, half):
     return max(best - length * (hi - lo), 0.0)
 
 
-@_jit
-def _obstacle_distance(kind, inverse, dims, a, b, p, d):
-    """Distance from the world segment a-b (3,) to one obstacle (see scene.SceneKernel);
-    p (3,), d (11,) are scratch. Negative (penetration) for spheres and capsules."""
-    for r in range(3):
-        p[r] = inverse[r, 0] * a[0] + inverse[r, 1] * a[1] + inverse[r, 2] * a[2] + inverse[r, 3]
-        d[r] = (inverse[r, 0] * b[0] + inverse[r, 1] * b[1] + inverse[r, 2] * b[2]
-                + inverse[r, 3] - p[r])
+@_inline
+def _local_distance(kind, F, h, W, o):
+    """Distance from the segment p + t d in an obstacle's frame (p = W[o:o+3], d =
+    W[o+3:o+6], W[o+6:o+14] scratch) to the obstacle of kind and dimensions F[h:h+3].
+    Negative (penetration) for spheres and capsules."""
+    px, py, pz, dx, dy, dz = W[o], W[o + 1], W[o + 2], W[o + 3], W[o + 4], W[o + 5]
     if kind == 0:
-        return _segment_box(p, d, dims, d[3:11])
+        return _segment_box(W, o, F, h)
     if kind == 1:
-        return _segment_point(p[0], p[1], p[2], p[0] + d[0], p[1] + d[1], p[2] + d[2],
-                              0.0, 0.0, 0.0) - dims[0]
+        return _segment_point(px, py, pz, px + dx, py + dy, pz + dz, 0.0, 0.0, 0.0) - F[h]
     if kind == 2:
-        return _segment_cylinder(p, d, dims[0], dims[1])
-    return _segment_segment(p[0], p[1], p[2], p[0] + d[0], p[1] + d[1], p[2] + d[2],
-                            0.0, 0.0, -dims[1], 0.0, 0.0, dims[1]) - dims[0]
+        return _segment_cylinder(px, py, pz, dx, dy, dz, F[h], F[h + 1])
+    return _segment_segment(px, py, pz, px + dx, py + dy, pz + dz, 0.0, 0.0, -F[h + 1], 0.0,
+                            0.0, F[h + 1]) - F[h]
 
 
-# --- the arm and one state ---------------------------------------------------------------------
+@_inline
+def _to_local(F, v, ax, ay, az, bx, by, bz, W, o):
+    """The world segment a-b in the frame whose inverse is F[v:v+12] (3, 4): p into W[o:o+3],
+    d into W[o+3:o+6]."""
+    for r in range(3):
+        i = v + 4 * r
+        pr = F[i] * ax + F[i + 1] * ay + F[i + 2] * az + F[i + 3]
+        W[o + r] = pr
+        W[o + 3 + r] = F[i] * bx + F[i + 1] * by + F[i + 2] * bz + F[i + 3] - pr
+
+
+# --- the model: one float array F and one int array I (few arguments cross numba's dispatcher) -
+#
+# I: n, m (capsules), pairs, obstacles, then kinds (n), body (m), pairs (2 per pair), obstacle
+# kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
+# frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
+# centres (o, 3), bounding radii (o). Work W: segments (m, 6), p, d and the sort scratch (14),
+# the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n).
+
+@_inline
+def weights_at(I):
+    """Where the displacement weights start in F."""
+    n, m = I[0], I[1]
+    return n + 12 + 12 * n + 7 * m
+
+
+@_inline
+def work_array(I):
+    """The kernels' work array W."""
+    W = np.empty(10 * I[1] + 15 + I[0])
+    W[10 * I[1] + 14] = -1.0              # no closest pair yet
+    return W
+
+
+@_inline
+def state_at(I):
+    """Where the work array holds a state q (n,)."""
+    return 10 * I[1] + 15
+
+
+@_inline
+def _times_link(a, b, c, d, F, lk):
+    """A row (a, b, c, d) of a frame times the link transform F[lk:lk+12] (3, 4)."""
+    return (a * F[lk] + b * F[lk + 4] + c * F[lk + 8],
+            a * F[lk + 1] + b * F[lk + 5] + c * F[lk + 9],
+            a * F[lk + 2] + b * F[lk + 6] + c * F[lk + 10],
+            a * F[lk + 3] + b * F[lk + 7] + c * F[lk + 11] + d)
+
 
 @_jit
-def _segments(q, kinds, offsets, pre, links, body, ca, cb, seg, T, L):
-    """World segments (m, 6) of the capsules at q; capsules sorted by body (-1 = fixed)."""
-    m, n = body.shape[0], q.shape[0]
+def free_distance(q, base, F, I, W, floor, cap):
+    """How far (m) every point of the arm may move from the state q[base:base+n] without
+    contact: ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may
+    move), returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
+    within floor. Obstacles a cheap lower bound (bounding ball, then for a box the separation
+    along its axes) puts beyond the best so far are skipped. F, I: the model; W: work."""
+    n, m, npairs, nobs = I[0], I[1], I[2], I[3]
+    i_body = 4 + n
+    i_pairs = i_body + m
+    i_okind = i_pairs + 2 * npairs
+    f_links = n + 12
+    f_ca = f_links + 12 * n
+    f_cb = f_ca + 3 * m
+    f_rad = f_cb + 3 * m
+    f_inv = f_rad + m + n
+    f_dims = f_inv + 12 * nobs
+    f_cen = f_dims + 3 * nobs
+    f_bound = f_cen + 3 * nobs
+    w_p = 6 * m
+    w_b = w_p + 14
+    # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
     k = 0
-    while k < m and body[k] < 0:
+    while k < m and I[i_body + k] < 0:
         for r in range(3):
-            seg[k, r], seg[k, 3 + r] = ca[k, r], cb[k, r]
+            W[6 * k + r], W[6 * k + 3 + r] = F[f_ca + 3 * k + r], F[f_cb + 3 * k + r]
         k += 1
-    for r in range(3):
-        for c in range(4):
-            T[r, c] = pre[r, c]
+    # The frame T (rows r0, r1, r2 of 3 x 4) in scalars: they stay in registers.
+    r00, r01, r02, r03 = F[n], F[n + 1], F[n + 2], F[n + 3]
+    r10, r11, r12, r13 = F[n + 4], F[n + 5], F[n + 6], F[n + 7]
+    r20, r21, r22, r23 = F[n + 8], F[n + 9], F[n + 10], F[n + 11]
     for i in range(n):
-        v = q[i] + offsets[i]
-        if kinds[i] == 0:
+        v = q[base + i] + F[i]
+        if I[4 + i] == 0:
             cs, sn = math.cos(v), math.sin(v)
-            for r in range(3):
-                x, y = T[r, 0], T[r, 1]
-                T[r, 0], T[r, 1] = cs * x + sn * y, cs * y - sn * x
+            r00, r01 = cs * r00 + sn * r01, cs * r01 - sn * r00
+            r10, r11 = cs * r10 + sn * r11, cs * r11 - sn * r10
+            r20, r21 = cs * r20 + sn * r21, cs * r21 - sn * r20
         else:
-            for r in range(3):
-                T[r, 3] += v * T[r, 2]
-        while k < m and body[k] == i:
-            for r in range(3):
-                seg[k, r] = T[r, 0] * ca[k, 0] + T[r, 1] * ca[k, 1] + T[r, 2] * ca[k, 2] + T[r, 3]
-                seg[k, 3 + r] = (T[r, 0] * cb[k, 0] + T[r, 1] * cb[k, 1] + T[r, 2] * cb[k, 2]
-                                 + T[r, 3])
+            r03 += v * r02
+            r13 += v * r12
+            r23 += v * r22
+        while k < m and I[i_body + k] == i:
+            for e in range(2):
+                c = f_ca + 3 * k if e == 0 else f_cb + 3 * k
+                x, y, z = F[c], F[c + 1], F[c + 2]
+                W[6 * k + 3 * e] = r00 * x + r01 * y + r02 * z + r03
+                W[6 * k + 3 * e + 1] = r10 * x + r11 * y + r12 * z + r13
+                W[6 * k + 3 * e + 2] = r20 * x + r21 * y + r22 * z + r23
             k += 1
         if i + 1 < n:
-            for r in range(3):
-                for c in range(4):
-                    L[r, c] = T[r, 0] * links[i, 0, c] + T[r, 1] * links[i, 1, c] + \
-                        T[r, 2] * links[i, 2, c]
-                L[r, 3] += T[r, 3]
-            for r in range(3):
-                for c in range(4):
-                    T[r, c] = L[r, c]
-
-
-@_jit
-def free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind, oinv, odims,
-                  ocenter, obound, floor, cap, seg, T, L, p, d):
-    """How far (m) every point of the arm may move from q without contact:
-    ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may move),
-    returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
-    within floor. Pairs the broad phase puts beyond the best so far are skipped.
-    seg (m, 6), T, L (3, 4), p, d (3,): scratch."""
-    _segments(q, kinds, offsets, pre, links, body, ca, cb, seg, T, L)
+            lk = f_links + 12 * i
+            r00, r01, r02, r03 = _times_link(r00, r01, r02, r03, F, lk)
+            r10, r11, r12, r13 = _times_link(r10, r11, r12, r13, F, lk)
+            r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
+    # Each capsule's bounding ball: centre and half length into W[w_b + 4k : w_b + 4k + 4].
+    for k in range(m):
+        x, y, z = W[6 * k + 3] - W[6 * k], W[6 * k + 4] - W[6 * k + 1], W[6 * k + 5] - W[6 * k + 2]
+        W[w_b + 4 * k] = W[6 * k] + 0.5 * x
+        W[w_b + 4 * k + 1] = W[6 * k + 1] + 0.5 * y
+        W[w_b + 4 * k + 2] = W[6 * k + 2] + 0.5 * z
+        W[w_b + 4 * k + 3] = 0.5 * math.sqrt(x * x + y * y + z * z) + F[f_rad + k]
     best = cap
-    for s in range(pairs.shape[0]):
-        i, j = pairs[s, 0], pairs[s, 1]
-        gap = 0.5 * (_segment_segment(seg[i, 0], seg[i, 1], seg[i, 2], seg[i, 3], seg[i, 4],
-                                      seg[i, 5], seg[j, 0], seg[j, 1], seg[j, 2], seg[j, 3],
-                                      seg[j, 4], seg[j, 5]) - radius[i] - radius[j])
+    for s in range(npairs):
+        ci, cj = I[i_pairs + 2 * s], I[i_pairs + 2 * s + 1]
+        i, j = 6 * ci, 6 * cj
+        # Bounding balls at least 2 best apart: this pair cannot lower best.
+        bi, bj = w_b + 4 * ci, w_b + 4 * cj
+        x, y, z = W[bi] - W[bj], W[bi + 1] - W[bj + 1], W[bi + 2] - W[bj + 2]
+        reach = 2.0 * best + W[bi + 3] + W[bj + 3]
+        if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
+            continue
+        gap = 0.5 * (_segment_segment(W[i], W[i + 1], W[i + 2], W[i + 3], W[i + 4], W[i + 5],
+                                      W[j], W[j + 1], W[j + 2], W[j + 3], W[j + 4], W[j + 5])
+                     - F[f_rad + ci] - F[f_rad + cj])
         if gap < best:
             best = gap
             if best <= floor:
                 return best
-    for k in range(body.shape[0]):
-        a, b = seg[k, 0:3], seg[k, 3:6]
-        for o in range(okind.shape[0]):
-            c = ocenter[o]
-            lower = _segment_point(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]) \
-                - obound[o] - radius[k]
-            if lower >= best:
+    # Capsule-obstacle pairs, the closest pair of the previous call first (consecutive states
+    # on an edge are alike: a small best early lets the bounds skip most other pairs).
+    witness = int(W[w_b + 4 * m])
+    for step in range(m * nobs + 1):
+        if step == 0:
+            if witness < 0 or witness >= m * nobs:
                 continue
-            gap = _obstacle_distance(okind[o], oinv[o], odims[o], a, b, p, d) - radius[k]
-            if gap < best:
-                best = gap
-                if best <= floor:
-                    return best
+            pair = witness
+        else:
+            pair = step - 1
+            if pair == witness:
+                continue
+        k, o = pair // nobs, pair % nobs
+        ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
+        bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
+        radius = F[f_rad + k]
+        bk = w_b + 4 * k
+        # Bounding balls of capsule and obstacle at least best apart: skip.
+        c = f_cen + 3 * o
+        x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
+        reach = best + W[bk + 3] + F[f_bound + o]
+        if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
+            continue
+        _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
+        kind, h = I[i_okind + o], f_dims + 3 * o
+        if kind == 0:
+            apart = 0.0
+            for r in range(3):
+                e = W[w_p + r] + W[w_p + 3 + r]
+                apart = max(apart, min(W[w_p + r], e) - F[h + r],
+                            -F[h + r] - max(W[w_p + r], e))
+            if apart - radius >= best:
+                continue
+        gap = _local_distance(kind, F, h, W, w_p) - radius
+        if gap < best:
+            best = gap
+            W[w_b + 4 * m] = pair
+            if best <= floor:
+                return best
     return best
 
 
 @_jit
-def check(Q, weights, floor, cap, edge, kinds, offsets, pre, links, body, ca, cb, radius, pairs,
-          okind, oinv, odims, ocenter, obound, out):
-    """The one compiled entry point.
+def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
+    """Whether the straight joint-space edge qa -> qb (n,) is certified free, the states
+    checked, and the free distance found at qb (capped).
 
-    With edge false: `free_distance` (with floor and cap) of every row of Q (N, n) into out (N,).
-
-    With edge true: whether the straight joint-space edge Q[0] -> Q[1] is certified free, into
-    out[0] (1 or 0), and the states checked into out[1]. A piece between checked states a and b
-    on which no point of the arm moves more than D (`displacement_weights`) is certified when
-    ``f_a + f_b > D + floor`` (f: `free_distance`): a configuration a fraction t along it has
-    moved at most tD from a and (1 - t)D from b, so it keeps ``(f_a + f_b - D) / 2 > floor / 2``
-    from every obstacle. Pieces not certified are halved, breadth first (the middle, then
-    quarters, ...); the edge fails at the first state with f <= floor. Both ends are checked.
-
-    free_distance is called at one place only: the compiled code stays small.
+    A piece between checked states a and b on which no point of the arm moves more than D
+    (`displacement_weights`) is certified when ``f_a + f_b > D + floor`` (f: `free_distance`):
+    a configuration a fraction t along it has moved at most tD from a and (1 - t)D from b, so
+    it keeps ``(f_a + f_b - D) / 2 > floor / 2`` from every obstacle. Pieces not certified are
+    halved, breadth first (the middle, then quarters, ...); the edge fails at the first state
+    with f <= floor. Both ends are checked. queue (4, size): work (a larger one is made when
+    the edge needs it). fa_known: qa's free distance when known (a tree node's: any lower
+    bound of it above floor), else any value <= floor. free_distance is called at one place
+    only: the code stays small.
     """
-    n = Q.shape[1]
-    seg = np.empty((body.shape[0], 6))
-    T, L, p, d = np.empty((3, 4)), np.empty((3, 4)), np.empty(3), np.empty(11)
-    q = np.empty(n)
+    n = qa.shape[0]
+    w = weights_at(I)
     total = 0.0
-    size = 1
-    if edge:
-        for i in range(n):
-            total += weights[i] * abs(Q[1, i] - Q[0, i])
-        size = 2 * int(math.ceil(total / floor)) + 8
-    t0, t1, f0, f1 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
-    head, tail, checked, fa = 0, 0, 0, 0.0
-    a_t = b_t = a_f = b_f = 0.0
+    for i in range(n):
+        total += F[w + i] * abs(qb[i] - qa[i])
+    size = 2 * int(math.ceil(total / floor)) + 8
+    if size > queue.shape[1]:
+        queue = np.empty((4, size))
+    else:
+        size = queue.shape[1]
+    at = state_at(I)
+    head, tail, checked, stage = 0, 0, 0, 0
+    a_t = b_t = a_f = b_f = fa = fb = 0.0
+    if fa_known > floor:
+        fa, stage = fa_known, 1
     while True:
-        if not edge:
-            if checked == Q.shape[0]:
-                return
-            t, cap_here = 0.0, cap
-            for j in range(n):
-                q[j] = Q[checked, j]
+        if stage < 2:                           # qa, qb, then the middle of the next piece
+            t, cap = float(stage), total + 2.0 * floor
         else:
-            # The next state: Q[0], Q[1], then the middle of the next piece not certified.
-            if checked < 2:
-                t, cap_here = float(checked), total + floor
-            else:
-                t = -1.0
-                while head != tail:
-                    a_t, b_t, a_f, b_f = t0[head], t1[head], f0[head], f1[head]
-                    head = (head + 1) % size
-                    span = (b_t - a_t) * total
-                    if a_f + b_f <= span + floor:
-                        t, cap_here = 0.5 * (a_t + b_t), 0.5 * span + floor
-                        break
-                if t < 0.0:
-                    out[0], out[1] = 1.0, checked
-                    return
-            for j in range(n):
-                q[j] = Q[0, j] + t * (Q[1, j] - Q[0, j])
-        f = free_distance(q, kinds, offsets, pre, links, body, ca, cb, radius, pairs, okind,
-                          oinv, odims, ocenter, obound, floor, cap_here, seg, T, L, p, d)
+            t = -1.0
+            while head != tail:
+                a_t, b_t, a_f, b_f = queue[0, head], queue[1, head], queue[2, head], \
+                    queue[3, head]
+                head = (head + 1) % size
+                span = (b_t - a_t) * total
+                if a_f + b_f <= span + floor:
+                    t, cap = 0.5 * (a_t + b_t), 0.5 * span + floor
+                    break
+            if t < 0.0:
+                return True, checked, fb
+        for j in range(n):
+            W[at + j] = qa[j] + t * (qb[j] - qa[j])
+        f = free_distance(W, at, F, I, W, floor, cap)
         checked += 1
-        if not edge:
-            out[checked - 1] = f
-            continue
+        stage += 1
         if f <= floor:
-            out[0], out[1] = 0.0, checked
-            return
-        if checked == 1:
+            return False, checked, f
+        if stage == 1:
             fa = f
-        elif checked == 2:
-            t0[tail], t1[tail], f0[tail], f1[tail] = 0.0, 1.0, fa, f
-            tail = (tail + 1) % size
+            continue
+        if stage == 2:
+            fb = f
+            a_t, t, a_f = 0.0, 1.0, fa
         else:
-            t0[tail], t1[tail], f0[tail], f1[tail] = a_t, t, a_f, f
+            queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
             tail = (tail + 1) % size
-            t0[tail], t1[tail], f0[tail], f1[tail] = t, b_t, f, b_f
-            tail = (tail + 1) % size
+            a_t, t, a_f, f = t, b_t, f, b_f
+        queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
+        tail = (tail + 1) % size
+
+
+@_jit
+def states_kernel(Q, F, I, floor, cap, out):
+    """`free_distance` (with floor and cap) of the states Q, flat (k * n,), into out (k,), or
+    with out empty (0,) only returned (one state, nothing written); NaN for a state with a
+    value that is not finite. Returns the last state's."""
+    W = work_array(I)
+    n = I[0]
+    f = np.nan
+    for s in range(Q.shape[0] // n):
+        finite = True
+        for j in range(s * n, (s + 1) * n):
+            if not math.isfinite(Q[j]):
+                finite = False
+        f = free_distance(Q, s * n, F, I, W, floor, cap) if finite else np.nan
+        if out.shape[0]:
+            out[s] = f
+    return f
+
+
+@_jit
+def polyline_kernel(P, F, I, floor, queue):
+    """Whether every waypoint of P (k, n) and every straight edge between consecutive ones is
+    certified free (`edge_free`; one waypoint: its state), and the states checked."""
+    W = work_array(I)
+    checked = 0
+    for i in range(max(P.shape[0] - 1, 1)):          # one waypoint: the edge to itself
+        free, c, _ = edge_free(P[i], P[min(i + 1, P.shape[0] - 1)], F, I, W, floor, queue,
+                               -1.0)
+        checked += c
+        if not free:
+            return False, checked
+    return True, checked
+
+
+@_jit
+def obstacle_distances(kind, inverse, dims, a, b, out):
+    """Distance from the segment a-b (3,) to each obstacle: kind (o,), inverse (o, 3, 4),
+    dims (o, 3), into out (o,)."""
+    W = np.empty(14)
+    Fo = np.empty(15)
+    for o in range(kind.shape[0]):
+        for r in range(3):
+            for c in range(4):
+                Fo[4 * r + c] = inverse[o, r, c]
+            Fo[12 + r] = dims[o, r]
+        _to_local(Fo, 0, a[0], a[1], a[2], b[0], b[1], b[2], W, 0)
+        out[o] = _local_distance(kind[o], Fo, 12, W, 0)
 
 
 # --- Python side -------------------------------------------------------------------------------
@@ -370,9 +506,9 @@ def obstacle_distance(scene: Scene, a: ArrayLike, b: ArrayLike) -> NDArray:
     """
     k = scene_kernel(scene)
     a, b = np.asarray(a, float), np.asarray(b, float)
-    p, d = np.empty(3), np.empty(11)
-    return np.array([_obstacle_distance(k.kind[o], k.inverse[o], k.dims[o], a, b, p, d)
-                     for o in range(len(scene))])
+    out = np.empty(len(scene))
+    obstacle_distances(k.kind, np.ascontiguousarray(k.inverse), k.dims, a, b, out)
+    return out
 
 
 def arm_capsules(robot: Robot, geometry: ArmGeometry, q: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -410,6 +546,31 @@ def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
     return np.where(robot.chain.revolute, reach, 1.0)
 
 
+def pack_model(kinds, offsets, pre, links, body, ca, cb, radius, pairs, weights,
+               scene: SceneKernel) -> tuple[NDArray, NDArray]:
+    """The checker's arrays as one float array F and one int array I (`unpack_model`)."""
+    n, m, npairs, nobs = len(kinds), len(body), len(pairs), len(scene.kind)
+    I = np.concatenate([[n, m, npairs, nobs], kinds, body, np.reshape(pairs, -1),
+                        scene.kind]).astype(np.int64)
+    F = np.concatenate([offsets, np.reshape(pre[:3], -1), np.reshape(links[:, :3], -1),
+                        np.reshape(ca, -1), np.reshape(cb, -1), radius, weights,
+                        np.reshape(scene.inverse, -1), np.reshape(scene.dims, -1),
+                        np.reshape(scene.center, -1), scene.bound]).astype(float)
+    return F, I
+
+
+_NONE = np.empty(0)       # "one state, return it": nothing is written to it
+_NO_QUEUE = np.empty((4, 0))      # the edge test makes its own
+QUEUE_SIZE = 1024                 # the planners' edge-test work: longer edges make their own
+
+
+def _writable(a: NDArray) -> NDArray:
+    """a as a C-contiguous writable float array: the kernels' one signature (a read-only
+    array would compile them again)."""
+    a = np.ascontiguousarray(a, dtype=float)
+    return a if a.flags.writeable else a.copy()
+
+
 @dataclass(frozen=True, eq=False)
 class CollisionChecker:
     """One robot's capsules against one scene, compiled; built once, immutable.
@@ -430,8 +591,8 @@ class CollisionChecker:
     ----------
     weights : ndarray, (n,)
         The displacement bound per unit joint motion (m/rad, or 1 for prismatic joints).
-    kernel_args : tuple
-        Everything the kernels take, in their order.
+    model : (ndarray, ndarray)
+        Everything the kernels take, packed in one float and one int array (`pack_model`).
     """
 
     robot: Robot
@@ -439,7 +600,7 @@ class CollisionChecker:
     geometry: ArmGeometry | None = None
     resolution: float = 0.005
     weights: NDArray = field(init=False, repr=False)
-    kernel_args: tuple = field(init=False, repr=False)
+    model: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
         if not isinstance(self.scene, Scene):
@@ -468,16 +629,16 @@ class CollisionChecker:
             cb[row] = (T @ np.r_[geometry.b[c], 1])[:3]
         rank = np.empty(len(order), np.int64)
         rank[order] = np.arange(len(order))
-        pairs = np.ascontiguousarray(rank[geometry.self_pairs()].reshape(-1, 2))
+        pairs = rank[geometry.self_pairs()].reshape(-1, 2)
         k = self.robot.chain.kernel
-        sk: SceneKernel = scene_kernel(self.scene)
-        args = (np.ascontiguousarray(k.kinds), np.ascontiguousarray(k.offsets),
-                np.ascontiguousarray(k.pre), np.ascontiguousarray(k.links), body, ca, cb,
-                np.ascontiguousarray(geometry.radius[order]), pairs, sk.kind,
-                np.ascontiguousarray(sk.inverse), sk.dims, sk.center, sk.bound)
-        for a in args:
-            a.setflags(write=False)
-        object.__setattr__(self, "kernel_args", args)
+        F, I = pack_model(k.kinds, k.offsets, k.pre, k.links, body, ca, cb,
+                          geometry.radius[order], pairs, weights, scene_kernel(self.scene))
+        F.setflags(write=False)
+        I.setflags(write=False)
+        object.__setattr__(self, "model", (F, I))
+        object.__setattr__(self, "_one_shape", (self.robot.n,))
+        # A verdict needs the free distance only up to just above the resolution.
+        object.__setattr__(self, "_valid_cap", res * (1 + 1e-9) + 1e-12)
 
     @property
     def n(self) -> int:
@@ -493,21 +654,46 @@ class CollisionChecker:
     def upper(self) -> NDArray:
         return self.robot.chain.sampling_limits[1]
 
+    def _free(self, q: NDArray, floor: float, cap: float) -> NDArray:
+        """free_distance of the states q (..., n), already a float array; (...,)."""
+        F, I = self.model
+        if q.shape == (self.n,) and q.flags.c_contiguous and q.flags.writeable:
+            # One state: nothing allocated.
+            f = states_kernel(q, F, I, floor, cap, _NONE)
+            if math.isnan(f):
+                raise InputError("q: expected finite joint values, found NaN or inf")
+            return f
+        if q.ndim == 0 or q.shape[-1] != self.n:
+            joint_array(self.robot, q)                          # raises the precise error
+        q = _writable(q)
+        out = np.empty(q.shape[:-1])
+        states_kernel(q.reshape(-1), F, I, floor, cap, out.reshape(-1))
+        if np.isnan(out).any():
+            raise InputError("q: expected finite joint values, found NaN or inf")
+        return out
+
     def clearance(self, q: ArrayLike) -> NDArray:
         """Free distance f (m) at q (..., n): the smallest gap between a capsule and an
         obstacle, or half the smallest gap between two capsules of the arm (both can move);
         (...,). <= 0 where they touch or overlap (minus the depth for spheres, capsules)."""
-        q = joint_array(self.robot, q)
-        flat = q.reshape(-1, self.n)
-        out = np.empty(flat.shape[0])
-        check(flat, self.weights, -np.inf, np.inf, False, *self.kernel_args, out)
-        return out.reshape(q.shape[:-1])
+        if not (type(q) is np.ndarray and q.dtype == np.float64):
+            q = joint_array(self.robot, q)
+        return np.asarray(self._free(q, -np.inf, np.inf))
 
     def valid(self, q: ArrayLike) -> NDArray:
         """Free distance above the resolution: the states a certified edge may end on.
         (...,) bool."""
-        q = joint_array(self.robot, q)
-        return self.valid_states(q.reshape(-1, self.n)).reshape(q.shape[:-1])
+        if type(q) is np.ndarray and q.shape == self._one_shape and q.dtype == np.float64:
+            flags = q.flags
+            if flags.c_contiguous and flags.writeable:           # one state, straight in
+                F, I = self.model
+                f = states_kernel(q, F, I, self.resolution, self._valid_cap, _NONE)
+                if math.isnan(f):
+                    raise InputError("q: expected finite joint values, found NaN or inf")
+                return np.bool_(f > self.resolution)
+        if not (type(q) is np.ndarray and q.dtype == np.float64):
+            q = joint_array(self.robot, q)
+        return self._free(q, self.resolution, self._valid_cap) > self.resolution
 
     def __call__(self, q: ArrayLike) -> NDArray:
         """Same as `valid`: a checker is a validity callable on a batch of states."""
@@ -515,29 +701,35 @@ class CollisionChecker:
 
     def valid_states(self, Q: NDArray) -> NDArray:
         """`valid` for states (k, n) already checked for shape (the planners' call)."""
-        Q = np.ascontiguousarray(Q, dtype=float)
+        Q = _writable(Q)
         out = np.empty(Q.shape[0])
-        r = self.resolution
-        check(Q, self.weights, r, r * (1 + 1e-9) + 1e-12, False, *self.kernel_args, out)
-        return out > r
+        states_kernel(Q.reshape(-1), self.model[0], self.model[1], self.resolution,
+                      self._valid_cap, out)
+        return out > self.resolution
+
+    def polyline_free(self, path: NDArray) -> tuple[bool, int]:
+        """Whether every waypoint of path (k, n) and every edge between them is certified free
+        (no shape checks: the planners' call), and the states checked."""
+        path = _writable(path)
+        free, checked = polyline_kernel(path, self.model[0], self.model[1], self.resolution,
+                                        _NO_QUEUE)
+        return bool(free), int(checked)
 
     def interior_free(self, qa: NDArray, qb: NDArray) -> tuple[bool, int]:
         """Whether the edge qa -> qb (n,) is certified free (the planners' call; its endpoints
         are checked again), and the states checked."""
-        out = np.empty(2)
-        check(np.vstack([qa, qb]), self.weights, self.resolution, 0.0, True, *self.kernel_args,
-              out)
-        return bool(out[0]), int(out[1])
+        return self.polyline_free(np.vstack([qa, qb]))
 
     def edge_valid(self, qa: ArrayLike, qb: ArrayLike) -> tuple[bool, int]:
         """Whether the straight joint-space edge qa -> qb (n,) is certified free, endpoints
         included, and the number of states checked."""
         qa, qb = joint_array(self.robot, qa, "qa"), joint_array(self.robot, qb, "qb")
+        if qa.shape != (self.n,) or qb.shape != (self.n,):
+            raise InputError(f"qa, qb: expected one configuration each ({self.n},), found "
+                             f"{qa.shape} and {qb.shape}")
         return self.interior_free(qa, qb)
 
     def path_valid(self, path: ArrayLike) -> bool:
         """Every waypoint of path (k, n) and every edge between them certified free."""
         path = joint_array(self.robot, path, "path")
-        if not self.valid_states(path.reshape(-1, self.n)).all():
-            return False
-        return all(self.interior_free(a, b)[0] for a, b in zip(path[:-1], path[1:]))
+        return self.polyline_free(path.reshape(-1, self.n))[0]

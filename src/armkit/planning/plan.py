@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.errors import InputError
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.collision import CollisionChecker
+from armkit.planning.compiled import plan_compiled
 from armkit.planning.rrt import PLANNERS, ValidityFunction
 from armkit.planning.scene import Scene
 from armkit.planning.smooth import path_length, resample, resample_keeping_vertices, shortcut
@@ -234,9 +235,14 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
         if not (math.isfinite(step) and step > 0):
             raise InputError(f"step: expected a positive joint-space step, found {step}")
         budget = DEFAULT_ITERATIONS[planner] if max_iterations is None else int(max_iterations)
-        raw, iterations, k, reason = PLANNERS[planner](
-            validity, start, goals, step=step, rng=np.random.default_rng(seed),
-            max_iterations=budget, time_limit=time_limit, goal_bias=goal_bias)
+        if isinstance(validity, CollisionChecker):         # the whole loop compiled
+            raw, iterations, k, reason = plan_compiled(
+                validity, start, goals, planner, step=step, seed=seed, max_iterations=budget,
+                time_limit=time_limit, goal_bias=goal_bias)
+        else:
+            raw, iterations, k, reason = PLANNERS[planner](
+                validity, start, goals, step=step, rng=np.random.default_rng(seed),
+                max_iterations=budget, time_limit=time_limit, goal_bias=goal_bias)
         checked += k
         if raw is None:
             return failed(reason, goals, iterations, checked)
@@ -261,6 +267,8 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
 
 
 def _certified(validity, path: NDArray) -> bool:
+    if isinstance(validity, CollisionChecker):
+        return validity.polyline_free(path)[0]
     if not validity.valid_states(path).all():
         return False
     return all(validity.interior_free(a, b)[0] for a, b in zip(path[:-1], path[1:]))

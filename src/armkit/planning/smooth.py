@@ -11,6 +11,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
+from armkit.planning.collision import CollisionChecker
+from armkit.planning.compiled import shortcut_compiled
 
 
 def _path(path: ArrayLike) -> NDArray:
@@ -64,6 +66,8 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
         Same start and end, no longer than the input.
     """
     p = _drop_repeats(_path(path))
+    if isinstance(validity, CollisionChecker):                  # compiled
+        return shortcut_compiled(validity, p, seed=seed, tries=tries)[0]
     ends_in_edge = bool(getattr(validity, "edge_checks_ends", False))
     rng = np.random.default_rng(seed)
     draws = np.sort(rng.random((tries, 2)), axis=1)          # arc-length fractions, drawn once
