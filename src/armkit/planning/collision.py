@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics.forward import fk_frames
+from armkit.model.chain import KernelChain
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import Scene, SceneKernel, scene_kernel
@@ -239,6 +240,13 @@ def work_array(I):
 
 
 @_inline
+def state_size(I):
+    """The length n of a state q: the robot's joint values (its moving joints, mimic ones
+    included, are I[0])."""
+    return I[I.shape[0] - 1]
+
+
+@_inline
 def state_at(I):
     """Where the work array holds a state q (n,)."""
     return 10 * I[1] + 15
@@ -264,14 +272,16 @@ def free_distance(q, base, F, I, W, floor, cap):
     i_body = 4 + n
     i_pairs = i_body + m
     i_okind = i_pairs + 2 * npairs
+    i_source = i_okind + nobs
     f_links = n + 12
     f_ca = f_links + 12 * n
     f_cb = f_ca + 3 * m
     f_rad = f_cb + 3 * m
-    f_inv = f_rad + m + n
+    f_inv = f_rad + m + state_size(I)
     f_dims = f_inv + 12 * nobs
     f_cen = f_dims + 3 * nobs
     f_bound = f_cen + 3 * nobs
+    f_scale = f_bound + nobs
     w_p = 6 * m
     w_b = w_p + 14
     # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
@@ -285,7 +295,7 @@ def free_distance(q, base, F, I, W, floor, cap):
     r10, r11, r12, r13 = F[n + 4], F[n + 5], F[n + 6], F[n + 7]
     r20, r21, r22, r23 = F[n + 8], F[n + 9], F[n + 10], F[n + 11]
     for i in range(n):
-        v = q[base + i] + F[i]
+        v = F[f_scale + i] * q[base + I[i_source + i]] + F[i]
         if I[4 + i] == 0:
             cs, sn = math.cos(v), math.sin(v)
             r00, r01 = cs * r00 + sn * r01, cs * r01 - sn * r00
@@ -446,7 +456,7 @@ def states_kernel(Q, F, I, floor, cap, out):
     with out empty (0,) only returned (one state, nothing written); NaN for a state with a
     value that is not finite. Returns the last state's."""
     W = work_array(I)
-    n = I[0]
+    n = state_size(I)
     f = np.nan
     for s in range(Q.shape[0] // n):
         finite = True
@@ -522,18 +532,19 @@ def arm_capsules(robot: Robot, geometry: ArmGeometry, q: ArrayLike) -> tuple[NDA
 
 
 def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
-    """Per joint, how far (m) a point of the arm can move per unit of that joint's motion (rad
-    or m): for a revolute joint a bound on the distance of any capsule point riding on it from
-    its axis (chain of joint-origin distances), 1 for a prismatic joint. (n,)."""
-    k, n = robot.chain.kernel, robot.n
+    """Per joint value, how far (m) a point of the arm can move per unit of its motion (rad or
+    m): for a revolute joint a bound on the distance of any capsule point riding on it from its
+    axis (chain of joint-origin distances), 1 for a prismatic joint; a value that drives mimic
+    joints adds theirs, times their multipliers. (n,)."""
+    k, nj = robot.chain.kernel, robot.chain.n_joints
     lo, hi = robot.chain.sampling_limits
+    # Each moving joint's value spans scale * (lo .. hi) + offset of its source value.
+    travel = np.abs(k.scale * np.stack([lo[k.source], hi[k.source]]) + k.offsets).max(axis=0)
     to_body = link_to_body(robot)
-    step = np.empty(n)                  # bound on |o_{i+1} - o_i|, o_i joint i's origin
-    for i in range(n - 1):
-        step[i] = np.linalg.norm(k.links[i][:3, 3])
-        if k.kinds[i + 1] == 1:
-            step[i] += max(abs(lo[i + 1] + k.offsets[i + 1]), abs(hi[i + 1] + k.offsets[i + 1]))
-    reach = np.zeros(n)                 # from joint i's origin, per body j >= i
+    step = np.empty(nj)                 # bound on |o_{i+1} - o_i|, o_i joint i's origin
+    for i in range(nj - 1):
+        step[i] = np.linalg.norm(k.links[i][:3, 3]) + (travel[i + 1] if k.kinds[i + 1] else 0.0)
+    reach = np.zeros(nj)                # from joint i's origin, per body j >= i
     for c in range(len(geometry)):
         j = geometry.link[c] - 1        # body: joint j's moved frame
         if j < 0:
@@ -543,19 +554,23 @@ def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
                      np.linalg.norm((T @ np.r_[geometry.b[c], 1])[:3]))
         for i in range(j + 1):
             reach[i] = max(reach[i], step[i:j].sum() + extent)
-    return np.where(robot.chain.revolute, reach, 1.0)
+    weights = np.zeros(robot.n)
+    np.add.at(weights, k.source, np.abs(k.scale) * np.where(k.kinds == 0, reach, 1.0))
+    return weights
 
 
-def pack_model(kinds, offsets, pre, links, body, ca, cb, radius, pairs, weights,
+def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
                scene: SceneKernel) -> tuple[NDArray, NDArray]:
-    """The checker's arrays as one float array F and one int array I (`unpack_model`)."""
-    n, m, npairs, nobs = len(kinds), len(body), len(pairs), len(scene.kind)
-    I = np.concatenate([[n, m, npairs, nobs], kinds, body, np.reshape(pairs, -1),
-                        scene.kind]).astype(np.int64)
-    F = np.concatenate([offsets, np.reshape(pre[:3], -1), np.reshape(links[:, :3], -1),
-                        np.reshape(ca, -1), np.reshape(cb, -1), radius, weights,
-                        np.reshape(scene.inverse, -1), np.reshape(scene.dims, -1),
-                        np.reshape(scene.center, -1), scene.bound]).astype(float)
+    """The checker's arrays as one float array F and one int array I, in the order
+    `free_distance` reads them; I ends with the length of a state (`state_size`)."""
+    n, m, npairs, nobs = len(chain.kinds), len(body), len(pairs), len(scene.kind)
+    I = np.concatenate([[n, m, npairs, nobs], chain.kinds, body, np.reshape(pairs, -1),
+                        scene.kind, chain.source, [len(weights)]]).astype(np.int64)
+    F = np.concatenate([chain.offsets, np.reshape(chain.pre[:3], -1),
+                        np.reshape(chain.links[:, :3], -1), np.reshape(ca, -1),
+                        np.reshape(cb, -1), radius, weights, np.reshape(scene.inverse, -1),
+                        np.reshape(scene.dims, -1), np.reshape(scene.center, -1), scene.bound,
+                        chain.scale]).astype(float)
     return F, I
 
 
@@ -610,8 +625,9 @@ class CollisionChecker:
             raise InputError(f"resolution: expected a positive length (m), found {res:g}")
         object.__setattr__(self, "resolution", res)
         geometry = self.geometry if self.geometry is not None else arm_geometry(self.robot)
-        if len(geometry) and geometry.link.max() > self.robot.n:
-            raise InputError(f"geometry: expected links 0 .. {self.robot.n} of "
+        links = self.robot.chain.n_joints
+        if len(geometry) and geometry.link.max() > links:
+            raise InputError(f"geometry: expected links 0 .. {links} of "
                              f"{self.robot.name}, found link {geometry.link.max()}")
         object.__setattr__(self, "geometry", geometry)
         weights = displacement_weights(self.robot, geometry)
@@ -630,9 +646,8 @@ class CollisionChecker:
         rank = np.empty(len(order), np.int64)
         rank[order] = np.arange(len(order))
         pairs = rank[geometry.self_pairs()].reshape(-1, 2)
-        k = self.robot.chain.kernel
-        F, I = pack_model(k.kinds, k.offsets, k.pre, k.links, body, ca, cb,
-                          geometry.radius[order], pairs, weights, scene_kernel(self.scene))
+        F, I = pack_model(self.robot.chain.kernel, body, ca, cb, geometry.radius[order], pairs,
+                          weights, scene_kernel(self.scene))
         F.setflags(write=False)
         I.setflags(write=False)
         object.__setattr__(self, "model", (F, I))
