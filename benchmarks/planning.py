@@ -344,31 +344,11 @@ def main() -> None:
     robot = armkit.robot("inspection_6dof")
     geometry = default_geometry(robot, 0.04)
     print(first_call_compile())
-    shelf_checker = CollisionChecker(robot, shelf(), geometry, R)
-    checker_figures(shelf_checker, args.quick)
-    w = np.linalg.norm(shelf_checker.weights)
-    extent = float(np.linalg.norm(robot.upper - robot.lower))
-    safe = R / w / extent
+    checker_figures(CollisionChecker(robot, shelf(), geometry, R), args.quick)
     for scene_name, scene, (start, goal) in (("shelf", shelf(), SHELF),
                                              ("window", window(), WINDOW)):
-        checker = CollisionChecker(robot, scene, geometry, R)
-        plan(checker, start, goal, seed=0)                       # compiled before timing
-        print(f"\n## {scene_name}: {len(seeds)} seeds; times in ms; lengths joint-space rad")
-        print("| planner | success | median | p90 | states checked | length | shortcut length |"
-              " shortcut ms | dense fails |")
-        print("|---|---|---|---|---|---|---|---|---|")
-        for planner in ("rrtconnect", "rrt", "rrtstar"):
-            report(f"armkit {planner} (certified, r = 5 mm)",
-                   ours(checker, start, goal, planner, seeds))
-        report("OMPL RRTConnect, coarse (1 %)",
-               ompl_runs(checker, start, goal, "rrtconnect", seeds, None, 10.0))
-        if not args.no_ompl_safe:
-            report(f"OMPL RRTConnect, safe ({safe:.2g}), 10 s",
-                   ompl_runs(checker, start, goal, "rrtconnect", seeds, safe, 10.0))
-        report("OMPL RRT, coarse (1 %), 2 s", ompl_runs(checker, start, goal, "rrt", seeds,
-                                                        None, 2.0))
-        report("OMPL RRTstar, coarse (1 %), 1 s", ompl_runs(checker, start, goal, "rrtstar",
-                                                           seeds, None, 1.0))
+        scene_table(scene_name, CollisionChecker(robot, scene, geometry, R), start, goal, seeds,
+                    args)
     bookshelf_table(seeds, args)
     print(f"\nload average at end: {os.getloadavg()}")
 
