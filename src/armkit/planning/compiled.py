@@ -331,11 +331,14 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
 
 
 @_jit
-def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
+def shortcut_kernel(P, tries, min_gain, rng, floor, queue, F, I, counters):
     """Random shortcuts (two points drawn along the path by arc length, joined straight where
     the edge is certified), then greedy vertex reduction (each kept vertex joined to the
-    farthest later vertex it reaches by a certified edge). P (k, n), no repeated rows.
-    Returns the new path; states checked added to counters[0]."""
+    farthest later vertex it reaches by a certified edge). P (k, n), no repeated rows. A draw
+    whose shortcut would save less than min_gain times the path's length is not checked (it
+    counts as a try): certifying a long edge near obstacles costs many states, and late draws
+    mostly straighten what is nearly straight already. Returns the new path; states checked
+    added to counters[0]."""
     W = work_array(I)
     n = P.shape[1]
     cap = P.shape[0] + tries + 2
@@ -357,7 +360,7 @@ def shortcut_kernel(P, tries, rng, floor, queue, F, I, counters):
             s1, s2 = s2, s1
         i1 = _point_at(p, cum, k, s1, a)
         i2 = _point_at(p, cum, k, s2, b)
-        if i1 == i2:
+        if i1 == i2 or (s2 - s1) - _distance(a, b) < min_gain * cum[k - 1]:
             continue
         free, checked, _ = edge_free(a, b, F, I, W, floor, queue, -1.0)
         counters[0] += checked
@@ -527,11 +530,14 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
 
 
 def shortcut_compiled(checker: CollisionChecker, path: NDArray, *, seed: int | None,
-                      tries: int) -> tuple[NDArray, int]:
-    """`shortcut_kernel` on a path (k, n) without repeated rows: (path, states checked)."""
+                      tries: int, min_gain: float = 0.01) -> tuple[NDArray, int]:
+    """`shortcut_kernel` on a path (k, n) without repeated rows: (path, states checked).
+    min_gain: the least saving worth checking a shortcut for, a fraction of the path's
+    length."""
     counters = np.zeros(1, np.int64)
     F, I = checker.model
-    out = shortcut_kernel(np.ascontiguousarray(path, dtype=float), int(tries), rng_state(seed),
+    out = shortcut_kernel(np.ascontiguousarray(path, dtype=float), int(tries), float(min_gain),
+                          rng_state(seed),
                           checker.resolution, np.empty((4, QUEUE_SIZE)), F, I,
                           counters)
     return out, int(counters[0])

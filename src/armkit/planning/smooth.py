@@ -42,13 +42,16 @@ def _point_at(p: NDArray, cum: NDArray, s: float) -> tuple[int, NDArray]:
     return i, p[i] + t * (p[i + 1] - p[i])
 
 
-def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64) -> NDArray:
+def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64,
+             min_gain: float = 0.01) -> NDArray:
     """A shorter path through the same free space: random shortcuts, then greedy vertex
     reduction.
 
     Random shortcuts join two points drawn anywhere along the path (by arc length) by a
     straight edge where it is free; greedy vertex reduction then joins each kept vertex to the
-    farthest later vertex it reaches straight.
+    farthest later vertex it reaches straight. A draw whose shortcut would save less than
+    `min_gain` of the path's length is not checked (certifying a long edge near obstacles
+    costs many states for little).
 
     Parameters
     ----------
@@ -59,6 +62,8 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
     seed : int or None
     tries : int
         Random shortcut attempts.
+    min_gain : float
+        The least saving worth checking, a fraction of the current path's length.
 
     Returns
     -------
@@ -67,7 +72,7 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
     """
     p = _drop_repeats(_path(path))
     if isinstance(validity, CollisionChecker):                  # compiled
-        return shortcut_compiled(validity, p, seed=seed, tries=tries)[0]
+        return shortcut_compiled(validity, p, seed=seed, tries=tries, min_gain=min_gain)[0]
     ends_in_edge = bool(getattr(validity, "edge_checks_ends", False))
     rng = np.random.default_rng(seed)
     draws = np.sort(rng.random((tries, 2)), axis=1)          # arc-length fractions, drawn once
@@ -77,7 +82,7 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
             break
         i1, a = _point_at(p, cum, f1 * cum[-1])
         i2, b = _point_at(p, cum, f2 * cum[-1])
-        if i1 == i2:
+        if i1 == i2 or (f2 - f1) * cum[-1] - np.linalg.norm(b - a) < min_gain * cum[-1]:
             continue
         if (ends_in_edge or validity.valid_states(np.vstack([a, b])).all()) and \
                 validity.interior_free(a, b)[0]:
