@@ -197,5 +197,6 @@ def test_plan_bad_input(shelf_checker):
     with pytest.raises(InputError, match="goal_pose"):
         plan(lambda Q: np.ones(len(Q), bool), [0, 0], goal_pose=np.eye(4),
              limits=([0, 0], [1, 1]))
-    with pytest.raises(InputError, match="checker: expected 1 booleans for 1 states"):
+    # start and goal go to the checker in one batch
+    with pytest.raises(InputError, match="checker: expected 2 booleans for 2 states"):
         plan(lambda Q: np.ones(3, bool), [0, 0], [1, 1], limits=([0, 0], [1, 1]))

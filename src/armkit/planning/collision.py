@@ -31,7 +31,7 @@ from armkit.kinematics.forward import fk_frames
 from armkit.model.chain import KernelChain
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
-from armkit.planning.scene import Scene, SceneKernel, scene_kernel
+from armkit.planning.scene import BOX, CAPSULE, SPHERE, Scene, SceneKernel, scene_kernel
 
 _jit = numba.njit(cache=True, nogil=True)
 # Helpers with one call site are inlined in numba's IR (a jitted callee's code is optimised
@@ -221,7 +221,8 @@ def _to_local(F, v, ax, ay, az, bx, by, bz, W, o):
 # I: n, m (capsules), pairs, obstacles, then kinds (n), body (m), pairs (2 per pair), obstacle
 # kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
 # frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
-# centres (o, 3), bounding radii (o). Work W: segments (m, 6), p, d and the sort scratch (14),
+# centres (o, 3), bounding radii (o), the moving joints' mimic scales (n), then the obstacles'
+# world bounding boxes' half sizes (o, 3) about their centres. Work W: segments (m, 6), p, d and the sort scratch (14),
 # the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n).
 
 @_inline
@@ -282,6 +283,7 @@ def free_distance(q, base, F, I, W, floor, cap):
     f_cen = f_dims + 3 * nobs
     f_bound = f_cen + 3 * nobs
     f_scale = f_bound + nobs
+    f_half = f_scale + n
     w_p = 6 * m
     w_b = w_p + 14
     # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
@@ -358,9 +360,16 @@ def free_distance(q, base, F, I, W, floor, cap):
         ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
         bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
         radius = F[f_rad + k]
-        bk = w_b + 4 * k
+        # World bounding boxes of capsule and obstacle at least best apart along an axis:
+        # skip (no transform to the obstacle's frame).
+        c, e = f_cen + 3 * o, f_half + 3 * o
+        x = max(min(ax, bx) - F[c] - F[e], F[c] - F[e] - max(ax, bx))
+        y = max(min(ay, by) - F[c + 1] - F[e + 1], F[c + 1] - F[e + 1] - max(ay, by))
+        z = max(min(az, bz) - F[c + 2] - F[e + 2], F[c + 2] - F[e + 2] - max(az, bz))
+        if max(x, max(y, z)) - radius >= best:
+            continue
         # Bounding balls of capsule and obstacle at least best apart: skip.
-        c = f_cen + 3 * o
+        bk = w_b + 4 * k
         x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
         reach = best + W[bk + 3] + F[f_bound + o]
         if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
@@ -559,6 +568,19 @@ def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
     return weights
 
 
+def world_half_sizes(scene: SceneKernel) -> NDArray:
+    """Half sizes (o, 3) of a box about each obstacle's centre, along the base frame's axes,
+    that holds the obstacle (m): its frame's half sizes (a box's, a sphere's radius, a
+    cylinder's radius and half length, a capsule's with its caps) through the absolute
+    rotation."""
+    kind, dims = scene.kind, scene.dims
+    local = np.where((kind == SPHERE)[:, None], dims[:, :1], dims[:, [0, 0, 1]])
+    local = np.where((kind == BOX)[:, None], dims, local)
+    local[kind == CAPSULE, 2] += dims[kind == CAPSULE, 0]
+    rotation = np.transpose(scene.inverse[:, :, :3], (0, 2, 1))      # obstacle to base
+    return np.einsum("oij,oj->oi", np.abs(rotation), local)
+
+
 def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
                scene: SceneKernel) -> tuple[NDArray, NDArray]:
     """The checker's arrays as one float array F and one int array I, in the order
@@ -570,7 +592,7 @@ def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
                         np.reshape(chain.links[:, :3], -1), np.reshape(ca, -1),
                         np.reshape(cb, -1), radius, weights, np.reshape(scene.inverse, -1),
                         np.reshape(scene.dims, -1), np.reshape(scene.center, -1), scene.bound,
-                        chain.scale]).astype(float)
+                        chain.scale, np.reshape(world_half_sizes(scene), -1)]).astype(float)
     return F, I
 
 

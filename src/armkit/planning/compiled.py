@@ -449,11 +449,15 @@ def rng_state(seed: int | None) -> NDArray:
 
 
 def _branch(nodes: NDArray, parent: NDArray, i: int) -> NDArray:
-    out = []
+    """The rows of nodes from the root to node i, following parent."""
+    chain = []
     while i >= 0:
-        out.append(nodes[i])
-        i = parent[i]
-    return np.array(out[::-1])
+        chain.append(i)
+        i = int(parent[i])
+    return nodes[chain[::-1]]
+
+
+_NO_LIST = np.full(1, -1, np.int64)       # RRT and RRT-Connect keep no child lists
 
 
 def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, planner: str, *,
@@ -464,34 +468,43 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     doubled whenever full)."""
     t0 = time.perf_counter()
     n = checker.n
-    lower = np.array(checker.lower, dtype=float)
+    lower = np.array(checker.lower, dtype=float)      # writable: the kernels' one signature
     upper = np.array(checker.upper, dtype=float)
-    goals = np.array(goals, dtype=float).reshape(-1, n)
-    margin = int(math.ceil(float(np.linalg.norm(upper - lower)) / step)) + 4
+    goals = np.ascontiguousarray(goals, dtype=float).reshape(-1, n)
+    extent = upper - lower
+    margin = int(math.ceil(math.sqrt(float(extent @ extent)) / step)) + 4
     capacity = max(int(capacity), len(goals) + margin + 1)
     nodes = np.empty((2, capacity, n))
-    parent = np.full((2, capacity), -1, np.int64)
-    cost = np.zeros((2, capacity))
-    clear = np.full((2, capacity), -1.0)          # each node's free distance (capped), -1 unknown
+    parent = np.empty((2, capacity), np.int64)      # rows past size are written before read
+    cost = np.empty((2, capacity))
+    clear = np.empty((2, capacity))                 # each node's free distance (capped)
     size = np.zeros(2, np.int64)
     nodes[0, 0] = start
+    parent[0, 0], cost[0, 0], clear[0, 0] = -1, 0.0, -1.0       # -1: not known
     size[0] = 1
     if planner == "rrtconnect":
-        nodes[1, :len(goals)] = goals
-        size[1] = len(goals)
-    child = np.full(capacity, -1, np.int64)
-    sibling = np.full(capacity, -1, np.int64)
-    goal_of = np.full(capacity, -1, np.int64)
-    goal_nodes = np.empty(capacity, np.int64)
+        g = len(goals)
+        nodes[1, :g] = goals
+        parent[1, :g], cost[1, :g], clear[1, :g] = -1, 0.0, -1.0
+        size[1] = g
+    if planner == "rrtstar":
+        child = np.full(capacity, -1, np.int64)
+        sibling = np.full(capacity, -1, np.int64)
+        goal_of = np.full(capacity, -1, np.int64)
+        goal_nodes = np.empty(capacity, np.int64)
+        volume = float(np.prod(extent))
+        unit_ball = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
+        gamma = 2.0 * ((1 + 1 / n) * volume / unit_ball) ** (1 / n)
+        grow = grow_star
+    else:
+        child = sibling = goal_of = goal_nodes = _NO_LIST
+        gamma = 0.0
+        grow = grow_connect if planner == "rrtconnect" else grow_rrt
     counters = np.zeros(6, np.int64)
     counters[END_A] = counters[END_B] = -1
     best = np.array([np.inf])
     rng = rng_state(seed)
     queue = np.empty((4, QUEUE_SIZE))
-    volume = float(np.prod(upper - lower))
-    unit_ball = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
-    gamma = 2.0 * ((1 + 1 / n) * volume / unit_ball) ** (1 / n)
-    grow = {"rrt": grow_rrt, "rrtconnect": grow_connect, "rrtstar": grow_star}[planner]
     F, I = checker.model
     chunk = 64
     status = RUNNING
@@ -507,9 +520,10 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
             parent = np.concatenate([parent, np.full_like(parent, -1)], axis=1)
             cost = np.concatenate([cost, np.zeros_like(cost)], axis=1)
             clear = np.concatenate([clear, np.full_like(clear, -1.0)], axis=1)
-            child, sibling, goal_of = (np.concatenate([x, np.full_like(x, -1)])
-                                       for x in (child, sibling, goal_of))
-            goal_nodes = np.concatenate([goal_nodes, np.empty_like(goal_nodes)])
+            if planner == "rrtstar":
+                child, sibling, goal_of = (np.concatenate([x, np.full_like(x, -1)])
+                                           for x in (child, sibling, goal_of))
+                goal_nodes = np.concatenate([goal_nodes, np.empty_like(goal_nodes)])
             continue
         if counters[ITERATIONS] >= max_iterations or time.perf_counter() - t0 > time_limit:
             break
@@ -519,7 +533,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     if status == FOUND and planner == "rrtconnect":
         pa = _branch(nodes[0], parent[0], end_a)
         pb = _branch(nodes[1], parent[1], end_b)
-        return np.vstack([pa, pb[::-1][1:]]), iterations, checked, "ok"
+        return np.concatenate([pa, pb[-2::-1]]), iterations, checked, "ok"
     if end_a >= 0 and planner in ("rrt", "rrtstar"):
         path = _branch(nodes[0], parent[0], end_a)
         if not np.array_equal(path[-1], goals[end_b]):

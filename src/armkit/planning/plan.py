@@ -198,9 +198,22 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
 
     if np.any(start < lower - 1e-12) or np.any(start > upper + 1e-12):
         return failed("start outside the joint limits")
-    if not validity.valid_states(start[None])[0]:
+    if goal_pose is None:
+        # Start and goal configurations checked in one call.
+        goals = _configuration(goal, n, "goal", robot).reshape(-1, n)
+        inside = np.all((goals >= lower - 1e-12) & (goals <= upper + 1e-12), axis=1)
+        ok = validity.valid_states(np.vstack([start, goals]))
+        if not ok[0]:
+            return failed("start in collision")
+        if not inside.any():
+            return failed("goal outside the joint limits", goals)
+        ok = ok[1:] & inside
+        if not ok.any():
+            return failed("goal in collision", goals)
+        goals = goals[ok]
+    elif not validity.valid_states(start[None])[0]:
         return failed("start in collision")
-    if goal_pose is not None:
+    else:
         if robot is None:
             raise InputError("goal_pose: expected a Robot or a CollisionChecker to solve its IK, "
                              "found a validity function")
@@ -210,15 +223,6 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
         goals = goals[validity.valid_states(goals)]
         if len(goals) == 0:
             return failed("no collision-free IK solution for the goal pose")
-    else:
-        goals = _configuration(goal, n, "goal", robot).reshape(-1, n)
-        inside = np.all((goals >= lower - 1e-12) & (goals <= upper + 1e-12), axis=1)
-        if not inside.any():
-            return failed("goal outside the joint limits", goals)
-        ok = validity.valid_states(goals) & inside
-        if not ok.any():
-            return failed("goal in collision", goals)
-        goals = goals[ok]
     goals = np.ascontiguousarray(goals)
     checked = 1 + len(goals)
 
