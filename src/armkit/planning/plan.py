@@ -196,12 +196,18 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
         return PlanResult(False, empty, reason, planner, dt, dt, 0.0, iterations, checked,
                           empty, math.nan, math.nan, goals)
 
-    if np.any(start < lower - 1e-12) or np.any(start > upper + 1e-12):
+    # Small arrays: Python lists cost less than NumPy calls here.
+    low, high = (lower - 1e-12).tolist(), (upper + 1e-12).tolist()
+
+    def within(q):
+        return all(lo <= v <= hi for v, lo, hi in zip(q.tolist(), low, high))
+
+    if not within(start):
         return failed("start outside the joint limits")
     if goal_pose is None:
         # Start and goal configurations checked in one call.
         goals = _configuration(goal, n, "goal", robot).reshape(-1, n)
-        inside = np.all((goals >= lower - 1e-12) & (goals <= upper + 1e-12), axis=1)
+        inside = np.array([within(q) for q in goals], dtype=bool)
         ok = validity.valid_states(np.vstack([start, goals]))
         if not ok[0]:
             return failed("start in collision")
@@ -227,7 +233,8 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
     checked = 1 + len(goals)
 
     # The direct edge first: to the nearest goal.
-    nearest = goals[np.argmin(np.linalg.norm(goals - start, axis=1))]
+    nearest = goals[0] if len(goals) == 1 else \
+        goals[np.argmin(np.linalg.norm(goals - start, axis=1))]
     free, k = validity.interior_free(start, nearest)
     checked += k
     iterations = 0
@@ -235,7 +242,7 @@ def plan(robot_or_checker, start: ArrayLike, goal: ArrayLike | None = None, *,
         raw = np.vstack([start, nearest])
     else:
         if step is None:
-            step = 0.2 * float(np.linalg.norm(upper - lower))
+            step = 0.2 * math.dist(lower.tolist(), upper.tolist())
         if not (math.isfinite(step) and step > 0):
             raise InputError(f"step: expected a positive joint-space step, found {step}")
         budget = DEFAULT_ITERATIONS[planner] if max_iterations is None else int(max_iterations)
