@@ -181,6 +181,27 @@ def test_shortcut_and_resample():
         resample([[0, 0], [1, 1]], 1)
     with pytest.raises(InputError, match="path"):
         resample([0, 1], 3)
+    for bad in (-0.1, 1.0, float("nan"), "0.1"):
+        with pytest.raises(InputError, match=r"min_gain: expected a fraction .* found"):
+            shortcut(zigzag, validity, min_gain=bad)
+
+
+def test_shortcut_skips_small_savings_but_reduces_vertices():
+    """A detour saving less than min_gain is not tried as a random shortcut; the greedy
+    vertex reduction still removes its vertex (the straight edge is free)."""
+    validity = ValidityFunction(lambda Q: np.ones(len(Q), bool), [0, 0], [1, 1])
+    bent = np.array([[0, 0], [0.5, 0.001], [1, 0]], float)
+    calls = []
+
+    class Counting(ValidityFunction):
+        def interior_free(self, a, b):
+            calls.append((a, b))
+            return super().interior_free(a, b)
+
+    counting = Counting(validity.function, [0, 0], [1, 1])
+    short = shortcut(bent, counting, seed=0, min_gain=0.01)
+    np.testing.assert_allclose(short, [[0, 0], [1, 0]])
+    assert len(calls) == 1                      # only the reduction's edge 0 -> 2
 
 
 def test_plan_bad_input(shelf_checker):
