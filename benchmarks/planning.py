@@ -3,6 +3,7 @@ and OMPL's planners (the `ompl` package) given a Python callback to the same che
 
     python benchmarks/planning.py            # 100 seeds per scene and planner
     python benchmarks/planning.py --quick    # 10 seeds, fewer checker rounds
+    python benchmarks/planning.py --armkit-only    # without the OMPL rows
 
 Scenes (inspection_6dof, one capsule per link between consecutive DH frame origins, 40 mm):
 - shelf: issue 15's shelf (three plates and a back wall), start in the lower compartment, goal
@@ -299,6 +300,8 @@ def scene_table(name, checker, start, goal, seeds, args) -> None:
     for planner in ("rrtconnect", "rrt", "rrtstar"):
         report(f"armkit {planner} (certified, r = 5 mm)",
                ours(checker, start, goal, planner, seeds))
+    if args.armkit_only:
+        return
     report("OMPL RRTConnect, coarse (1 %)",
            ompl_runs(checker, start, goal, "rrtconnect", seeds, None, 10.0))
     if not args.no_ompl_safe:
@@ -334,6 +337,8 @@ def main() -> None:
                         help="skip OMPL at the safe resolution (slow)")
     parser.add_argument("--bookshelf-only", action="store_true",
                         help="only the UR5 bookshelf scene")
+    parser.add_argument("--armkit-only", action="store_true",
+                        help="armkit's rows only (no OMPL runs)")
     args = parser.parse_args()
     seeds = range(args.seeds or (10 if args.quick else 100))
     print(f"load average at start: {os.getloadavg()}")
