@@ -724,10 +724,13 @@ class CollisionChecker:
             flags = q.flags
             if flags.c_contiguous and flags.writeable:           # one state, straight in
                 F, I = self.model
-                f = states_kernel(q, F, I, self.resolution, self._valid_cap, _NONE)
+                r = self.resolution
+                f = states_kernel(q, F, I, r, self._valid_cap, _NONE)
+                if f > r:
+                    return np.True_
                 if math.isnan(f):
                     raise InputError("q: expected finite joint values, found NaN or inf")
-                return np.bool_(f > self.resolution)
+                return np.False_
         if not (type(q) is np.ndarray and q.dtype == np.float64):
             q = joint_array(self.robot, q)
         return self._free(q, self.resolution, self._valid_cap) > self.resolution

@@ -71,7 +71,7 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
         Same start and end, no longer than the input.
     """
     p = _drop_repeats(_path(path))
-    if not (isinstance(min_gain, (int, float)) and 0.0 <= min_gain < 1.0):
+    if not (isinstance(min_gain, (int, float, np.floating)) and 0.0 <= min_gain < 1.0):
         raise InputError(f"min_gain: expected a fraction of the path's length in [0, 1), found "
                          f"{min_gain!r}")
     if isinstance(validity, CollisionChecker):                  # compiled
