@@ -222,7 +222,8 @@ def _to_local(F, v, ax, ay, az, bx, by, bz, W, o):
 # kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
 # frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
 # centres (o, 3), bounding radii (o), the moving joints' mimic scales (n), then the obstacles'
-# world bounding boxes' half sizes (o, 3) about their centres. Work W: segments (m, 6), p, d and the sort scratch (14),
+# world bounding boxes' half sizes (o, 3) about their centres, the capsules' bounding-ball radii
+# (m). Work W: segments (m, 6), p, d and the sort scratch (14),
 # the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n).
 
 @_inline
@@ -284,6 +285,7 @@ def free_distance(q, base, F, I, W, floor, cap):
     f_bound = f_cen + 3 * nobs
     f_scale = f_bound + nobs
     f_half = f_scale + n
+    f_ball = f_half + 3 * nobs
     w_p = 6 * m
     w_b = w_p + 14
     # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
@@ -320,13 +322,14 @@ def free_distance(q, base, F, I, W, floor, cap):
             r00, r01, r02, r03 = _times_link(r00, r01, r02, r03, F, lk)
             r10, r11, r12, r13 = _times_link(r10, r11, r12, r13, F, lk)
             r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
-    # Each capsule's bounding ball: centre and half length into W[w_b + 4k : w_b + 4k + 4].
+    # Each capsule's bounding ball: centre and radius (half its length plus its radius, fixed)
+    # into W[w_b + 4k : w_b + 4k + 4].
     for k in range(m):
         x, y, z = W[6 * k + 3] - W[6 * k], W[6 * k + 4] - W[6 * k + 1], W[6 * k + 5] - W[6 * k + 2]
         W[w_b + 4 * k] = W[6 * k] + 0.5 * x
         W[w_b + 4 * k + 1] = W[6 * k + 1] + 0.5 * y
         W[w_b + 4 * k + 2] = W[6 * k + 2] + 0.5 * z
-        W[w_b + 4 * k + 3] = 0.5 * math.sqrt(x * x + y * y + z * z) + F[f_rad + k]
+        W[w_b + 4 * k + 3] = F[f_ball + k]
     best = cap
     for s in range(npairs):
         ci, cj = I[i_pairs + 2 * s], I[i_pairs + 2 * s + 1]
@@ -347,16 +350,21 @@ def free_distance(q, base, F, I, W, floor, cap):
     # Capsule-obstacle pairs, the closest pair of the previous call first (consecutive states
     # on an edge are alike: a small best early lets the bounds skip most other pairs).
     witness = int(W[w_b + 4 * m])
+    next_k, next_o = 0, -1                  # pair step - 1 as (capsule, obstacle): no division
     for step in range(m * nobs + 1):
         if step == 0:
             if witness < 0 or witness >= m * nobs:
                 continue
             pair = witness
+            k, o = pair // nobs, pair % nobs
         else:
+            next_o += 1
+            if next_o == nobs:
+                next_k, next_o = next_k + 1, 0
             pair = step - 1
             if pair == witness:
                 continue
-        k, o = pair // nobs, pair % nobs
+            k, o = next_k, next_o
         ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
         bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
         radius = F[f_rad + k]
@@ -431,7 +439,7 @@ def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
             while head != tail:
                 a_t, b_t, a_f, b_f = queue[0, head], queue[1, head], queue[2, head], \
                     queue[3, head]
-                head = (head + 1) % size
+                head = head + 1 if head + 1 < size else 0
                 span = (b_t - a_t) * total
                 if a_f + b_f <= span + floor:
                     t, cap = 0.5 * (a_t + b_t), 0.5 * span + floor
@@ -453,10 +461,10 @@ def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
             a_t, t, a_f = 0.0, 1.0, fa
         else:
             queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
-            tail = (tail + 1) % size
+            tail = tail + 1 if tail + 1 < size else 0
             a_t, t, a_f, f = t, b_t, f, b_f
         queue[0, tail], queue[1, tail], queue[2, tail], queue[3, tail] = a_t, t, a_f, f
-        tail = (tail + 1) % size
+        tail = tail + 1 if tail + 1 < size else 0
 
 
 @_jit
@@ -592,7 +600,9 @@ def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
                         np.reshape(chain.links[:, :3], -1), np.reshape(ca, -1),
                         np.reshape(cb, -1), radius, weights, np.reshape(scene.inverse, -1),
                         np.reshape(scene.dims, -1), np.reshape(scene.center, -1), scene.bound,
-                        chain.scale, np.reshape(world_half_sizes(scene), -1)]).astype(float)
+                        chain.scale, np.reshape(world_half_sizes(scene), -1),
+                        0.5 * np.linalg.norm(np.reshape(cb, (-1, 3)) - np.reshape(ca, (-1, 3)),
+                                             axis=1) + radius + 1e-12]).astype(float)
     return F, I
 
 
