@@ -47,6 +47,9 @@ from armkit.threads import threads_for
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+# Kernels only ever called from another kernel: not cached on their own (a cached caller carries
+# their code), which saves writing and looking up cache entries when the first call compiles.
+_inner = numba.njit(nogil=True, error_model="numpy")
 # The kernels spell min and max as conditional expressions (Python's and numba's choice: the
 # second argument only if strictly greater, or smaller) and fill with loops rather than
 # np.zeros: each builtin overload is one more function the first call compiles.
@@ -69,7 +72,7 @@ def thread_count(targets: int, threads: int | None = None) -> int:
 
 # --- kernels ----------------------------------------------------------------------------------
 
-@_jit
+@_inner
 def _random(state):
     """splitmix64: the next state and a float in [0, 1)."""
     state = state + np.uint64(0x9E3779B97F4A7C15)
@@ -80,7 +83,7 @@ def _random(state):
     return state, float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@_jit
+@_inner
 def _step(A, e, lam, free, dq, H, g, y):
     """dq (n,) from the damped normal equations, in the smaller of the joint or task space;
     False if the system is not positive definite.
@@ -160,7 +163,7 @@ def _step(A, e, lam, free, dq, H, g, y):
     return True
 
 
-@_jit
+@_inner
 def _bounded(q, dq, lower, upper, turn, q_new):
     """q + dq kept in the limits: a joint with a full turn of range that leaves it comes back
     by whole turns, others stop at their limit. Returns the largest change."""
@@ -181,7 +184,7 @@ def _bounded(q, dq, lower, upper, turn, q_new):
     return size
 
 
-@_jit
+@_inner
 def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacobians, residuals,
              task_jacobians, joints, vectors, H, free, earlier, errors):
     """One attempt from q (updated in place to where it ends): (converged, cost, iterations);
