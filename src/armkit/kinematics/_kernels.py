@@ -4,8 +4,8 @@ A chain reaches the kernels as `KernelChain`: joint i turns about (or slides alo
 frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion. `pose_one` and
 `frames_one` carry a pose as 12 scalars (rotation rows and position) so that the whole product
 stays in registers; `pose_jacobian_one` keeps it in its output's rows (less code to compile
-for the first IK call, as fast: benchmarks/startup.py). The batch loops come twice, serial and parallel, and `run` picks one by the batch's size and the
-idle cores (`armkit.threads`).
+for the first IK call, as fast). The batch loops come twice, serial and parallel, and `run`
+picks one by the batch's size and the idle cores (`armkit.threads`).
 
 Compilation is lazy (no explicit signatures, which would compile every kernel, the parallel
 ones included, when this module is imported): a call compiles only the kernels it runs, and a
