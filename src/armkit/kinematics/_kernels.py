@@ -1,10 +1,11 @@
 """numba kernels for the chain's hot paths, one sample per call of a `_one` function.
 
 A chain reaches the kernels as `KernelChain`: joint i turns about (or slides along) z of the
-frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion. A pose is carried
-as 12 scalars (rotation rows and position) so that the whole product stays in registers; the
-batch loops come twice, serial and parallel, and `run` picks one by the batch's size and the
-idle cores (`armkit.threads`).
+frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion. `pose_one` and
+`frames_one` carry a pose as 12 scalars (rotation rows and position) so that the whole product
+stays in registers; `pose_jacobian_one` keeps it in its output's rows (less code to compile
+for the first IK call, as fast). The batch loops come twice, serial and parallel, and `run`
+picks one by the batch's size and the idle cores (`armkit.threads`).
 
 Compilation is lazy (no explicit signatures, which would compile every kernel, the parallel
 ones included, when this module is imported): a call compiles only the kernels it runs, and a
@@ -122,16 +123,36 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
         coupled |= source[i] != i or scale[i] != 1.0
     # Joint origins and axes in J's columns (or in scratch, when mimic joints share columns).
     axes = np.empty((6, n)) if coupled else J
-    T = _start(pre)
+    # The running pose is out's top three rows, updated row by row with `_move`'s and `_then`'s
+    # products in their order (the same results): a loop over rows is a third of the code that
+    # the 12-scalar form inlines, and this kernel is compiled by the first jacobian and IK call.
+    for r in range(3):
+        for c in range(4):
+            out[r, c] = pre[r, c]
     finite = True
     for i in range(n):
         v = q[source[i]]
         finite &= math.isfinite(v)
-        T = _move(T, kinds[i], scale[i] * v + offsets[i])
-        axes[0, i], axes[1, i], axes[2, i] = T[3], T[7], T[11]          # o_i, for now
-        axes[3, i], axes[4, i], axes[5, i] = T[2], T[6], T[10]          # z_i
-        T = _then(T, links[i])
-    px, py, pz = T[3], T[7], T[11]
+        value = scale[i] * v + offsets[i]
+        if kinds[i] == 0:
+            c, s = math.cos(value), math.sin(value)
+            for r in range(3):
+                a, b = out[r, 0], out[r, 1]
+                out[r, 0] = c * a + s * b
+                out[r, 1] = c * b - s * a
+        else:
+            for r in range(3):
+                out[r, 3] = out[r, 3] + value * out[r, 2]
+        C = links[i]
+        for r in range(3):
+            axes[r, i] = out[r, 3]                                      # o_i, for now
+            axes[3 + r, i] = out[r, 2]                                  # z_i
+            a, b, d, p = out[r, 0], out[r, 1], out[r, 2], out[r, 3]
+            out[r, 0] = a * C[0, 0] + b * C[1, 0] + d * C[2, 0]
+            out[r, 1] = a * C[0, 1] + b * C[1, 1] + d * C[2, 1]
+            out[r, 2] = a * C[0, 2] + b * C[1, 2] + d * C[2, 2]
+            out[r, 3] = a * C[0, 3] + b * C[1, 3] + d * C[2, 3] + p
+    px, py, pz = out[0, 3], out[1, 3], out[2, 3]
     for i in range(n):
         zx, zy, zz = axes[3, i], axes[4, i], axes[5, i]
         if kinds[i] == 0:
@@ -147,7 +168,7 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
         for i in range(n):
             for r in range(6):
                 J[r, source[i]] += scale[i] * axes[r, i]
-    _store(T, out)
+    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
     return finite
 
 

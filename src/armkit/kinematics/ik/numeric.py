@@ -47,6 +47,12 @@ from armkit.threads import threads_for
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+# Kernels only ever called from another kernel: not cached on their own (a cached caller carries
+# their code), which saves writing and looking up cache entries when the first call compiles.
+_inner = numba.njit(nogil=True, error_model="numpy")
+# The kernels spell min and max as conditional expressions (Python's and numba's choice: the
+# second argument only if strictly greater, or smaller) and fill with loops rather than
+# np.zeros: each builtin overload is one more function the first call compiles.
 
 NEWTON, LM = 0, 1
 METHOD_CODES = {"newton": NEWTON, "lm": LM}
@@ -66,7 +72,7 @@ def thread_count(targets: int, threads: int | None = None) -> int:
 
 # --- kernels ----------------------------------------------------------------------------------
 
-@_jit
+@_inner
 def _random(state):
     """splitmix64: the next state and a float in [0, 1)."""
     state = state + np.uint64(0x9E3779B97F4A7C15)
@@ -77,7 +83,7 @@ def _random(state):
     return state, float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
 
 
-@_jit
+@_inner
 def _step(A, e, lam, free, dq, H, g, y):
     """dq (n,) from the damped normal equations, in the smaller of the joint or task space;
     False if the system is not positive definite.
@@ -95,8 +101,8 @@ def _step(A, e, lam, free, dq, H, g, y):
             s = 0.0
             for r in range(m):
                 s += A[r, c] * A[r, c]
-            scale = max(scale, s)
-    damping = lam * max(scale, 1e-300)
+            scale = s if s > scale else scale
+    damping = lam * (scale if scale > 1e-300 else 1e-300)
     # Lower triangle of H and the right-hand side g.
     for i in range(k):
         for j in range(i + 1):
@@ -157,7 +163,7 @@ def _step(A, e, lam, free, dq, H, g, y):
     return True
 
 
-@_jit
+@_inner
 def _bounded(q, dq, lower, upper, turn, q_new):
     """q + dq kept in the limits: a joint with a full turn of range that leaves it comes back
     by whole turns, others stop at their limit. Returns the largest change."""
@@ -170,13 +176,15 @@ def _bounded(q, dq, lower, upper, turn, q_new):
             elif v > upper[j]:
                 v -= 2.0 * math.pi * math.ceil((v - upper[j]) / (2.0 * math.pi))
         else:
-            v = min(max(v, lower[j]), upper[j])
+            v = lower[j] if lower[j] > v else v
+            v = upper[j] if upper[j] < v else v
         q_new[j] = v
-        size = max(size, abs(v - q[j]))
+        change = abs(v - q[j])
+        size = change if change > size else size
     return size
 
 
-@_jit
+@_inner
 def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacobians, residuals,
              task_jacobians, joints, vectors, H, free, earlier, errors):
     """One attempt from q (updated in place to where it ends): (converged, cost, iterations);
@@ -214,7 +222,7 @@ def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacob
                 T, T2, J, J2, e, e2, A, A2 = T2, T, J2, J, e2, e, A2, A
                 cost = new_cost
                 if not first:
-                    lam = max(lam / 10.0, 1e-15)
+                    lam = lam / 10.0 if lam / 10.0 > 1e-15 else 1e-15
             else:
                 lam *= 10.0
         errors[0], errors[1] = task_errors_one(T, Tt, mask)
@@ -270,11 +278,14 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
     lower, upper, turn, sample_lo, sample_hi = limits
     max_iter, restarts, method, seed, follow, max_step, polish = budget
     n, m = starts.shape[2], task[1].shape[0]
-    k = max(min(m, n), 1)                               # scratch for _descend
+    k = m if m < n else n                               # scratch for _descend
+    k = k if k > 1 else 1
     poses, jacobians, residuals = np.empty((3, 4, 4)), np.empty((2, 6, n)), np.empty((2, m))
     task_jacobians, joints, vectors = np.empty((2, m, n)), np.empty((2, n)), np.empty((2, k))
     H, free, earlier = np.empty((k, k)), np.empty(n, dtype=np.bool_), np.empty(STALL_WINDOW)
-    q, previous, zero, found = np.empty(n), np.empty(n), np.zeros(n), np.empty(2)
+    q, previous, zero, found = np.empty(n), np.empty(n), np.empty(n), np.empty(2)
+    for j in range(n):
+        zero[j] = 0.0
     attempts = 1 if follow else restarts + 1
     for t in range(first, last):
         # The stream's start, scrambled: a start of seed * step + t would make seed s + 1
@@ -324,7 +335,8 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
                 d = q[j] - previous[j]
                 if turn[j]:                  # a wrapping joint: the short way round
                     d = (d + math.pi) % (2.0 * math.pi) - math.pi
-                step = max(step, abs(d))
+                d = abs(d)
+                step = d if d > step else step
             if t > first and step > max_step:
                 return t, 2
     return last, 0

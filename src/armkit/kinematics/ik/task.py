@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.errors import InputError
 
 _jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_inner = numba.njit(nogil=True, error_model="numpy")      # called by kernels only: not cached
 
 NAMED_MASKS = {
     "pose": (1, 1, 1, 1, 1, 1),
@@ -59,7 +60,7 @@ def mask_name(mask: NDArray) -> str:
     return "".join(str(int(f)) for f in mask)
 
 
-@_jit
+@_inner
 def _angle(ax, ay, az, bx, by, bz):
     cx, cy, cz = ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
     return math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz)
@@ -100,7 +101,7 @@ def task_errors_one(T, Tt, mask):
                                  Tt[0, o] - db * kx, Tt[1, o] - db * ky, Tt[2, o] - db * kz)
 
 
-@_jit
+@_inner
 def _log_rotation(E, out):
     """Rotation vector (3,) of the rotation E (3, 3) into out; accurate near 0 and pi."""
     sx, sy, sz = E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]
