@@ -231,9 +231,7 @@ def reach_bound(robot: Robot, lower: NDArray, upper: NDArray) -> float:
     travel, each turned by rotations, so its length is at most the sum of their lengths.
     """
     k = robot.chain.kernel
-    # Each moving joint's value spans scale * (lower .. upper) + offset of its source value.
-    ends = k.scale * np.stack([lower[k.source], upper[k.source]]) + k.offsets
-    travel = np.abs(ends).max(axis=0)
+    travel = np.abs(k.motion_ends(lower, upper)).max(axis=0)
     return float(np.linalg.norm(k.pre[:3, 3]) + np.linalg.norm(k.links[:, :3, 3], axis=1).sum()
                  + travel[k.kinds == 1].sum())
 

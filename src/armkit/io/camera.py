@@ -16,11 +16,11 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, ValidationError, field_validator
+from pydantic import Field, field_validator
 
 from armkit.calibration.frames import CameraMount
 from armkit.errors import ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
 from armkit.io.handeye import PoseField, rigid_pose
 from armkit.model.robot import Units
 
@@ -85,10 +85,7 @@ def parse_camera_mount(document, path: str = "<camera>") -> CameraMount:
     else:
         raise ModelFileError(path, "", "a camera_to_base pose or a handeye result",
                              f"fields {', '.join(map(str, document)) or 'none'}")
-    try:
-        spec = model.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(path, err, model) from None
+    spec = validated(path, document, model)
     units = Units(spec.units.length, spec.units.angle)
     if isinstance(spec, CameraToBaseFile):
         return CameraMount("fixed", rigid_pose(spec.camera_to_base, units, path, "camera_to_base"))

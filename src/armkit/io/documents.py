@@ -259,6 +259,14 @@ def validation_error(path: str, err: ValidationError, model: type[BaseModel]) ->
     return ModelFileError(path, _field_path(loc), expected, found_text(first.get("input")))
 
 
+def validated(path: str, document: Any, model: type[BaseModel]) -> BaseModel:
+    """`document` validated as `model`; its first error as one ModelFileError naming `path`."""
+    try:
+        return model.model_validate(document)
+    except ValidationError as err:
+        raise validation_error(path, err, model) from None
+
+
 def _fields_at(model: type[BaseModel], loc: tuple) -> list[str]:
     """Field names allowed at `loc` of a file validated by `model`, for 'did you mean'."""
     inner: type[BaseModel] | None = model

@@ -39,11 +39,11 @@ from typing import Annotated, Literal
 
 import numpy as np
 import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
 from armkit.calibration.handeye import HandEyeResult
 from armkit.errors import InputError, ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
 from armkit.kinematics.forward import fk
 from armkit.model.files import robot as load_named_robot
 from armkit.model.robot import Units
@@ -150,10 +150,7 @@ def read_handeye_poses(path: str | Path) -> HandEyePoses:
     if not isinstance(document, dict):
         raise ModelFileError(path, "", "a mapping with units, mode and poses",
                              type(document).__name__)
-    try:
-        spec = PosesFile.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(path, err, PosesFile) from None
+    spec = validated(path, document, PosesFile)
     units = Units(spec.units.length, spec.units.angle)
     needs_robot = [i for i, p in enumerate(spec.poses) if p.q is not None]
     model = None

@@ -37,11 +37,11 @@ import re
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, ValidationError
+from pydantic import Field
 
 from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, read_text, read_yaml, validation_error
+from armkit.io.documents import StrictModel, read_text, read_yaml, validated
 from armkit.model import Robot
 from armkit.model.files import robot as load_robot_by_name
 
@@ -148,10 +148,7 @@ def parse_register_map(document: Any, path: str = "<register map>",
         raise ModelFileError(path, "", "a mapping of fields (robot, joints, command, status)",
                              type(document).__name__)
     _check_size(document, path)
-    try:
-        spec = RegisterMapFile.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(path, err, RegisterMapFile) from None
+    spec = validated(path, document, RegisterMapFile)
     model = _robot(spec, path, robot)
     joints = _joints(spec, path, model)
     _check_acknowledgement(spec, path)

@@ -31,10 +31,10 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_text, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_text, read_yaml, validated
 from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
 from armkit.spatial import pose_from_xyz_rpy, quat_to_matrix
@@ -183,10 +183,7 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
     if not isinstance(document, dict):
         raise ModelFileError(path, "", "a mapping of fields (units, obstacles, ...)",
                              type(document).__name__)
-    try:
-        spec = _SceneFile.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(path, err, _SceneFile) from None
+    spec = validated(path, document, _SceneFile)
     if spec.goal is not None and spec.goal_pose is not None:
         raise ModelFileError(path, "goal_pose", "either goal or goal_pose", "both")
     units = Units(spec.units.length, spec.units.angle)

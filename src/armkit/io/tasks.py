@@ -35,10 +35,10 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, ValidationError
+from pydantic import Field
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_yaml, validation_error
+from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
 from armkit.io.scene import Obstacle
 from armkit.model.files import MAX_LENGTH
 from armkit.model.robot import Units
@@ -125,10 +125,7 @@ def parse_task(document: Any, path: str | Path = "<task>"):
     if not isinstance(document, dict):
         raise ModelFileError(where, "top level", "a mapping of task fields",
                              "nothing" if document is None else type(document).__name__)
-    try:
-        spec = TaskFile.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(where, err, TaskFile) from None
+    spec = validated(where, document, TaskFile)
     folder = Path(path).parent if where != "<task>" else Path(".")
     units = Units(spec.units.length, spec.units.angle)
     if spec.camera is None:

@@ -35,11 +35,11 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from armkit import trajectory as tj
 from armkit.errors import ArmkitError, InputError, ModelFileError
-from armkit.io.documents import StrictModel, read_yaml, validation_error
+from armkit.io.documents import StrictModel, read_yaml, validated
 from armkit.model import Robot
 
 Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
@@ -198,10 +198,7 @@ def load_case(source: str, overrides: dict[str, Any] | None = None) -> tuple[Cas
     where = source if from_file else "command line"
     document = {**document} if from_file else {"robot": source}
     document.update({k: v for k, v in (overrides or {}).items() if v is not None})
-    try:
-        return CaseFile.model_validate(document), from_file
-    except ValidationError as err:
-        raise validation_error(where, err, CaseFile) from None
+    return validated(where, document, CaseFile), from_file
 
 
 def read_case(source: str, overrides: dict[str, Any] | None = None) -> TrajectoryCase:

@@ -394,3 +394,9 @@ class KernelChain:
     after: NDArray
     source: NDArray
     scale: NDArray
+
+    def motion_ends(self, lower: ArrayLike, upper: ArrayLike) -> NDArray:
+        """(2, n_joints): each moving joint's motion ``scale * q[source] + offset`` at the
+        joint values `lower` and `upper` (n,) (not sorted: a negative scale swaps them)."""
+        ends = np.stack([np.asarray(lower, float), np.asarray(upper, float)])
+        return self.scale * ends[:, self.source] + self.offsets

@@ -28,11 +28,11 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import (Number, StrictModel, UnitsField, found_text, kind_of,
-                                 read_yaml, validation_error)
+                                 read_yaml, validated)
 from armkit.model.chain import Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
@@ -176,10 +176,7 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
         raise ModelFileError(path, "convention", "one of dh, mdh, poe, urdf",
                              found_text(convention) if "convention" in document else "nothing")
     model = FILE_MODELS[convention]
-    try:
-        spec = model.model_validate(document)
-    except ValidationError as err:
-        raise validation_error(path, err, model) from None
+    spec = validated(path, document, model)
     units = Units(spec.units.length, spec.units.angle)
     _check_magnitudes(spec, units, path)
     _check_unique_names(spec, path)

@@ -555,8 +555,7 @@ def displacement_weights(robot: Robot, geometry: ArmGeometry) -> NDArray:
     joints adds theirs, times their multipliers. (n,)."""
     k, nj = robot.chain.kernel, robot.chain.n_joints
     lo, hi = robot.chain.sampling_limits
-    # Each moving joint's value spans scale * (lo .. hi) + offset of its source value.
-    travel = np.abs(k.scale * np.stack([lo[k.source], hi[k.source]]) + k.offsets).max(axis=0)
+    travel = np.abs(k.motion_ends(lo, hi)).max(axis=0)
     to_body = link_to_body(robot)
     step = np.empty(nj)                 # bound on |o_{i+1} - o_i|, o_i joint i's origin
     for i in range(nj - 1):
