@@ -227,6 +227,18 @@ def test_a_mimic_joint_on_the_chain_moves_with_its_leader(tmp_path):
     assert found.success and abs(found.q[1] - 0.55) < 1e-9
 
 
+def test_the_reach_bound_counts_a_mimic_joints_stroke(tmp_path):
+    # finger = 2 slide: the finger strokes 1 m as the slide strokes 0.5 m.
+    finger = MIMIC_FINGER.replace('multiplier="-1"', 'multiplier="2"').replace(
+        'lower="0" upper="0.04"', 'lower="-2" upper="2"')
+    robot = armkit.load_robot(urdf(tmp_path, TREE.replace("</robot>", finger + "</robot>")),
+                              tip="finger")
+    Q = np.random.default_rng(1).uniform(*robot.sampling_limits, (2000, 2))
+    Q[:, 1] = np.where(np.arange(2000) % 2, robot.lower[1], robot.upper[1])
+    reach = np.linalg.norm(armkit.fk(robot, Q)[:, :3, 3] - robot.chain.points[0], axis=1)
+    assert reach.max() <= armkit.IKSolver(robot).reach
+
+
 def test_a_mimic_joint_whose_range_excludes_its_leaders_is_refused(tmp_path):
     # finger = -slide within 0 .. 0.04 m needs slide within -0.04 .. 0; its own is 0 .. 0.5.
     path = urdf(tmp_path, TREE.replace("</robot>", MIMIC_FINGER.replace(

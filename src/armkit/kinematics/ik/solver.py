@@ -177,10 +177,12 @@ def reach_bound(robot: Robot) -> float:
     than the sum of those distances, plus the longest stroke of each prismatic joint. A target
     farther than this is out of reach, whatever the solver.
     """
-    chain = robot.chain
+    chain, k = robot.chain, robot.chain.kernel
     points = np.vstack([chain.points, chain.T_home[:3, 3]])
-    strokes = np.where(chain.revolute, 0.0, np.maximum(np.abs(chain.lower), np.abs(chain.upper)))
-    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)) + strokes.sum())
+    # Each prismatic moving joint (mimic ones too) strokes from its value at q = 0.
+    strokes = np.abs(k.motion_ends(chain.lower, chain.upper) - k.offsets).max(axis=0)
+    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1))
+                 + strokes[k.kinds == 1].sum())
 
 
 _UNKNOWN = object()
