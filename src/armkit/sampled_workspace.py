@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.errors import InputError
+from armkit.jit import numba_threads
 from armkit.kinematics import fk
 from armkit.model.robot import Robot
 
@@ -350,14 +351,8 @@ def _chunks(plan: _Plan, first: int, stop: int,
 def _task(plan: _Plan, first: int, stop: int) -> _Partial:
     """`_chunks` as a Dask task, with one numba thread: the worker's own threads fill its
     cores already, and more threads than cores would only wait for each other."""
-    import numba
-
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)            # for this thread only
-    try:
+    with numba_threads(1):
         return _chunks(plan, first, stop)
-    finally:
-        numba.set_num_threads(threads)
 
 
 def _scheduler_address(address: str) -> str:

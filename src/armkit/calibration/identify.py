@@ -30,11 +30,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-import numba
 import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
+from armkit.jit import kernel
 from armkit.errors import InputError
 from armkit.kinematics.forward import fk
 from armkit.model.dh import DHTable, chain_from_dh
@@ -230,7 +230,7 @@ def evaluate(model: ParametricModel, params: NDArray, Q: NDArray,
     return T, (J if jacobian else None)
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(cache=True, nogil=True)
 def _evaluate_kernel(codes, signs, constants, params, Q, jacobian):
     """`evaluate` compiled: per configuration, the product of the factors kept as its four
     columns C[0..3] (x, y, z, position; right-multiplying by an elementary motion changes one
@@ -664,7 +664,7 @@ def _gauss_newton(system, params: NDArray, free: NDArray, current: tuple, iterat
     return (params, T, r, G, g), done
 
 
-@numba.njit(cache=True, nogil=True)
+@kernel(cache=True, nogil=True)
 def _gram_kernel(J, weights):
     """sum over measurements and rows k of (weights[k] J[i, k])^T (weights[k] J[i, k]): the
     normal matrix (P, P) of J (m, 6, P) on one thread (a BLAS product of this tall, thin

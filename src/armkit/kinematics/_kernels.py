@@ -21,14 +21,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from armkit.jit import kernel, numba_threads, prange
 from armkit.threads import threads_for
 
-_jit = numba.njit(cache=True, nogil=True)
-_inline = numba.njit(inline="always")
-_pjit = numba.njit(cache=True, nogil=True, parallel=True)
+_jit = kernel(cache=True, nogil=True)
+_inline = kernel(inline="always")
+_pjit = kernel(cache=True, nogil=True, parallel=True)
 
 GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: below this, the
 #                     start-up of a second thread costs more than the half batch it takes)
@@ -182,7 +182,7 @@ def poses(Q, kinds, offsets, pre, links, source, scale, out):
 
 @_pjit
 def poses_parallel(Q, kinds, offsets, pre, links, source, scale, out):
-    for k in numba.prange(Q.shape[0]):
+    for k in prange(Q.shape[0]):
         pose_one(Q[k], kinds, offsets, pre, links, source, scale, out[k])
 
 
@@ -194,7 +194,7 @@ def frames(Q, kinds, offsets, pre, links, source, scale, joint_frames, out):
 
 @_pjit
 def frames_parallel(Q, kinds, offsets, pre, links, source, scale, joint_frames, out):
-    for k in numba.prange(Q.shape[0]):
+    for k in prange(Q.shape[0]):
         frames_one(Q[k], kinds, offsets, pre, links, source, scale, joint_frames[k], out[k])
 
 
@@ -206,20 +206,17 @@ def pose_jacobians(Q, kinds, offsets, pre, links, source, scale, out, J):
 
 @_pjit
 def pose_jacobians_parallel(Q, kinds, offsets, pre, links, source, scale, out, J):
-    for k in numba.prange(Q.shape[0]):
+    for k in prange(Q.shape[0]):
         pose_jacobian_one(Q[k], kinds, offsets, pre, links, source, scale, out[k], J[k])
 
 
 def run(serial, parallel, Q: np.ndarray, *args) -> None:
     """Call the serial batch loop, or the parallel one on as many threads as the batch's size
-    and the idle cores are worth (`armkit.threads.threads_for`)."""
+    and the idle cores are worth (`armkit.threads.threads_for`); a few samples run light
+    (`armkit.jit`)."""
     threads = threads_for(Q.shape[0], GRAIN)
     if threads == 1:
-        serial(Q, *args)
+        serial.sized(Q.shape[0], Q, *args)
         return
-    before = numba.get_num_threads()
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))   # this thread only
-    try:
+    with numba_threads(threads):
         parallel(Q, *args)
-    finally:
-        numba.set_num_threads(before)

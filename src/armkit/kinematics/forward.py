@@ -39,7 +39,7 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
         # One configuration from Python: straight to the kernel, which also checks finiteness
         # (a non-finite q falls through to joint_array, which says what is wrong).
         out = np.empty((4, 4))
-        if _kernels.pose_one(q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out):
+        if _kernels.pose_one.light(q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out):
             return out
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)

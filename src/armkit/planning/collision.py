@@ -22,10 +22,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armkit.jit import kernel
 from armkit.errors import InputError
 from armkit.kinematics.forward import fk_frames
 from armkit.model.chain import KernelChain
@@ -33,10 +33,10 @@ from armkit.model.robot import Robot, joint_array
 from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import BOX, CAPSULE, SPHERE, Scene, SceneKernel, scene_kernel
 
-_jit = numba.njit(cache=True, nogil=True)
+_jit = kernel(cache=True, nogil=True)
 # Helpers with one call site are inlined in numba's IR (a jitted callee's code is optimised
 # again in each caller's module: a flat call tree compiles faster).
-_inline = numba.njit(cache=True, nogil=True, inline="always")
+_inline = kernel(cache=True, nogil=True, inline="always")
 
 GOLDEN_STEPS = 40           # bracket 0.618**40 ~ 4e-9 of the segment; its slack is subtracted
 

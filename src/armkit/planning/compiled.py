@@ -18,13 +18,13 @@ from __future__ import annotations
 import math
 import time
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from armkit.jit import kernel
 from armkit.planning.collision import QUEUE_SIZE, CollisionChecker, edge_free, work_array
 
-_jit = numba.njit(cache=True, nogil=True)
+_jit = kernel(cache=True, nogil=True)
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
 RUNNING, FOUND, FULL = 0, 1, 2

@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from armkit.jit import kernel, numba_threads, prange
 from armkit.threads import threads_for
 
-_jit = numba.njit(cache=True, nogil=True)
-_pjit = numba.njit(cache=True, nogil=True, parallel=True)
+_jit = kernel(cache=True, nogil=True)
+_pjit = kernel(cache=True, nogil=True, parallel=True)
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
 _CHUNK = 16384              # samples per parallel task
@@ -96,7 +96,7 @@ def evaluate(breaks, table, t, out):
 def evaluate_parallel(breaks, table, t, out):
     N = t.shape[0]
     chunks = (N + _CHUNK - 1) // _CHUNK
-    for c in numba.prange(chunks):
+    for c in prange(chunks):
         _span(breaks, table, t, out, c * _CHUNK, min(N, (c + 1) * _CHUNK))
 
 
@@ -107,12 +107,8 @@ def run_evaluate(breaks: np.ndarray, table: np.ndarray, t: np.ndarray, out: np.n
     if threads == 1:
         evaluate(breaks, table, t, out)
         return
-    before = numba.get_num_threads()
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))   # this thread only
-    try:
+    with numba_threads(threads):
         evaluate_parallel(breaks, table, t, out)
-    finally:
-        numba.set_num_threads(before)
 
 
 # --- rest-to-rest profile timing (profiles.py) ------------------------------------------------

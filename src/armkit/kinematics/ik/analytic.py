@@ -30,10 +30,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from armkit.jit import kernel
 from armkit.kinematics import _kernels
 from armkit.kinematics.ik.task import task_errors_one
 from armkit.model.chain import Chain
@@ -50,9 +50,9 @@ SAME = 1e-9              # branches closer than this in every joint are one solu
 # kernels call it); `_inline` for what is called from one place (inlined at numba's IR level:
 # one compilation fewer; inlining the many-place helpers too would copy their IR at every call
 # site and cost more to compile, measured).
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_inline = numba.njit(inline="always", error_model="numpy")
-_helper = numba.njit(nogil=True, error_model="numpy", no_cpython_wrapper=True,
+_jit = kernel(cache=True, nogil=True, error_model="numpy")
+_inline = kernel(inline="always", error_model="numpy")
+_helper = kernel(nogil=True, error_model="numpy", no_cpython_wrapper=True,
                      no_cfunc_wrapper=True)
 
 
@@ -650,7 +650,7 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     flags = np.empty((N, K, 4), dtype=np.bool_)
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
-    family.kernel(family.geometry, targets, q_ref, family.limits,
+    family.kernel.sized(N, family.geometry, targets, q_ref, family.limits,
                   (k.kinds, k.offsets, k.pre, k.links, k.source, k.scale), mask.astype(np.int64),
                   np.array([tol_position, tol_rotation]), q, errors, flags)
     return q, errors, flags

@@ -37,19 +37,19 @@ import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from armkit.jit import kernel
 from armkit.kinematics._kernels import pose_jacobian_one
 from armkit.kinematics.ik.task import task_errors_one, task_residual
 from armkit.threads import threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit = kernel(cache=True, nogil=True, error_model="numpy")
 # Kernels only ever called from another kernel: not cached on their own (a cached caller carries
 # their code), which saves writing and looking up cache entries when the first call compiles.
-_inner = numba.njit(nogil=True, error_model="numpy")
+_inner = kernel(nogil=True, error_model="numpy")
 # The kernels spell min and max as conditional expressions (Python's and numba's choice: the
 # second argument only if strictly greater, or smaller) and fill with loops rather than
 # np.zeros: each builtin overload is one more function the first call compiles.

@@ -12,13 +12,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from armkit.jit import kernel
 from armkit.kinematics import _kernels
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit = kernel(cache=True, nogil=True, error_model="numpy")
 
 
 def feature_columns(mask: NDArray) -> NDArray:
@@ -148,7 +148,7 @@ class SeedBank:
         # one thread, and thread start-up on a busy machine would cost ten times that.
         T = np.empty((samples, 4, 4))
         k = robot.chain.kernel
-        _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, T)
+        _kernels.poses.light(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, T)
         P = np.ascontiguousarray(T[:, :3, 3])
         G = max(1, round(samples ** (1 / 3)))
         lo = P.min(axis=0)
@@ -164,7 +164,7 @@ class SeedBank:
         """Starts (N, count, n) for targets (N, 4, 4): the `count` samples nearest each target
         by the features the mask uses, nearest first."""
         best = np.empty((targets.shape[0], min(count, self.q.shape[0])), dtype=np.int64)
-        _nearest(np.ascontiguousarray(features(targets, self.length)), self.features,
+        _nearest.sized(targets.shape[0], np.ascontiguousarray(features(targets, self.length)), self.features,
                  feature_columns(mask), self.lo, self.inv, self.cells, self.order, self.start,
                  best)
         return self.q[best]

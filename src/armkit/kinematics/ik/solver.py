@@ -406,7 +406,7 @@ class IKSolver:
         budget = (int(max_iter), 0, numeric.METHOD_CODES[label], int(seed), 0, 0.0, 0)
         chain, limits = self._kernel.chain, self._kernel.limits
         if q0 is not None and not beyond:
-            numeric.solve_targets(0, 1, targets, np.array(q0.reshape(1, 1, n)), chain, limits,
+            numeric.solve_targets.light(0, 1, targets, np.array(q0.reshape(1, 1, n)), chain, limits,
                                   task, budget, q, converged, iterations, errors)
         if not converged[0]:
             bank = self.bank if seeds else None
@@ -420,7 +420,7 @@ class IKSolver:
                 starts = np.array((first if first is not None else self._mid).reshape(1, 1, n))
             budget = (int(max_iter), 0 if beyond else int(restarts),
                       numeric.METHOD_CODES[label], int(seed), 0, 0.0, 1)
-            numeric.solve_targets(0, 1, targets, starts, chain, limits, task, budget, q,
+            numeric.solve_targets.light(0, 1, targets, starts, chain, limits, task, budget, q,
                                   converged, iterations, errors)
         pe, re = float(errors[0, 0]), float(errors[0, 1])
         success = pe < tol_position and re < tol_rotation
@@ -560,7 +560,7 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        _kernels.poses(flat, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out)
+        _kernels.poses.sized(flat.shape[0], flat, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:

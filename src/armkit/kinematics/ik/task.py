@@ -20,14 +20,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from armkit.jit import kernel
 from armkit.errors import InputError
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_inner = numba.njit(nogil=True, error_model="numpy")      # called by kernels only: not cached
+_jit = kernel(cache=True, nogil=True, error_model="numpy")
+_inner = kernel(nogil=True, error_model="numpy")      # called by kernels only: not cached
 
 NAMED_MASKS = {
     "pose": (1, 1, 1, 1, 1, 1),
@@ -236,5 +236,5 @@ def task_errors(T: ArrayLike, T_target: ArrayLike, mask: NDArray) -> tuple[NDArr
     flat = np.broadcast_to(T, lead + (4, 4)).reshape(-1, 4, 4).copy()
     flat_target = np.broadcast_to(T_target, lead + (4, 4)).reshape(-1, 4, 4).copy()
     position, rotation = np.empty(flat.shape[0]), np.empty(flat.shape[0])
-    _errors_batch(flat, flat_target, np.asarray(mask, dtype=np.int64), position, rotation)
+    _errors_batch.sized(flat.shape[0], flat, flat_target, np.asarray(mask, dtype=np.int64), position, rotation)
     return position.reshape(lead), rotation.reshape(lead)

@@ -1,0 +1,180 @@
+"""Kernels: functions that numba compiles to machine code, run as Python while that is cheaper.
+
+Compiling a kernel into an empty numba cache costs from a second to over ten (the numeric IK
+solver: about 13 s of CPU on the 2-core machines of BENCHMARKS.md); running the same function
+as Python costs microseconds to milliseconds for one configuration or one target. So a
+`Kernel` has two tiers, chosen by the caller, who knows how much work a call is:
+
+- ``kernel(*args)`` runs the compiled kernel, compiling it (or loading it from numba's cache)
+  on the first call. Batch work calls this.
+- ``kernel.light(*args)``, for a call with little work (one configuration, one target), runs
+  the kernel's Python function until the kernel is compiled or its Python runs have taken
+  `PYTHON_BUDGET` seconds in all; from then on, the compiled kernel. The kernels it calls run
+  as Python too. ``kernel.sized(items, *args)`` is light for at most `FEW` items of work
+  (configurations, targets), compiled for more. A math error that numba would answer with NaN (``math.acos(1.5)``, a
+  division by zero, the sine of infinity) ends the Python run, and the call is made again
+  compiled.
+
+A process whose light calls never add up to the budget compiles none of them and never imports
+numba; one that makes many of them pays at most the budget before compiling, as it would have
+from the first call. Both tiers run the same source: tests/test_jit.py holds them to the same
+results. A kernel declared ``parallel=True`` writes its parallel loop as ``prange``, which is
+``range`` in Python and numba's ``prange`` when compiled.
+
+The environment variable ``ARMKIT_JIT`` (read at import) chooses: ``auto`` (the default, as
+above), ``compiled`` (every call compiled, numba's own behaviour) or ``python`` (light calls
+always Python; for debugging a kernel).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import threading
+import time
+import types
+
+import numpy as np
+
+from armkit.errors import InputError
+
+PYTHON_BUDGET = 1.0     # s of Python runs per kernel before a light call compiles it
+FEW = 16                # items (configurations, targets) a `Kernel.sized` call runs light
+MODES = ("auto", "compiled", "python")
+_PYTHON_ERRORS = (ArithmeticError, ValueError)      # where numba's math returns inf or NaN
+
+prange = range
+
+
+def _mode_from_environment() -> str:
+    text = os.environ.get("ARMKIT_JIT", "").strip() or "auto"
+    if text not in MODES:
+        raise InputError(f"ARMKIT_JIT: expected one of {', '.join(MODES)}, found {text!r}")
+    return text
+
+
+mode = _mode_from_environment()
+
+
+class _Tier(threading.local):
+    """Whether this thread is inside a Python run of a kernel."""
+
+    python = False
+
+
+_tier = _Tier()
+
+
+class Kernel:
+    """A function numba compiles on demand (see the module's docstring).
+
+    Attributes
+    ----------
+    py_func : function
+        The function as written, run by the Python tier.
+    options : dict
+        `numba.njit`'s options.
+    python_seconds : float
+        Time its light calls have spent in Python so far (s).
+    """
+
+    def __init__(self, function, options: dict):
+        functools.update_wrapper(self, function)
+        self.py_func = function
+        self.options = options
+        self.python_seconds = 0.0
+        self._dispatcher = None
+        self._compiled = False
+        # A class of its own, whose __call__ becomes the dispatcher itself once compiled: a
+        # compiled call then costs what numba's dispatch costs and nothing more.
+        self.__class__ = type(f"Kernel.{function.__name__}", (Kernel,), {})
+
+    def __repr__(self) -> str:
+        return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
+
+    def __call__(self, *args):
+        if _tier.python:
+            return self.py_func(*args)
+        return self.compiled()(*args)
+
+    def light(self, *args):
+        """Call with little work: as Python while that is cheaper than compiling (see above)."""
+        if self._compiled or _tier.python:
+            return self(*args)
+        if mode == "compiled" or (mode == "auto" and self.python_seconds >= PYTHON_BUDGET):
+            return self.compiled()(*args)
+        start = time.perf_counter()
+        _tier.python = True
+        try:
+            with np.errstate(all="ignore"):
+                return self.py_func(*args)
+        except _PYTHON_ERRORS:
+            pass
+        finally:
+            _tier.python = False
+            self.python_seconds += time.perf_counter() - start
+        return self.compiled()(*args)
+
+    def sized(self, items: int, *args):
+        """Call for `items` items of work: `light` for at most `FEW`, else compiled."""
+        if items <= FEW:
+            return self.light(*args)
+        return self(*args)
+
+    @property
+    def dispatcher(self):
+        """numba's dispatcher for this kernel, created (not compiled) on first use."""
+        if self._dispatcher is None:
+            numba = _numba()
+            function = self.py_func
+            if self.options.get("parallel"):
+                # The same code, seeing numba's prange where the module has `prange`.
+                function = types.FunctionType(function.__code__,
+                                              {**function.__globals__, "prange": numba.prange},
+                                              function.__name__, function.__defaults__,
+                                              function.__closure__)
+                function.__qualname__ = self.py_func.__qualname__
+            self._dispatcher = numba.njit(**self.options)(function)
+        return self._dispatcher
+
+    def compiled(self):
+        """The dispatcher, which every later call of this kernel goes to directly."""
+        if not self._compiled:
+            dispatcher = self.dispatcher
+            type(self).__call__ = staticmethod(dispatcher)
+            self._compiled = True
+        return self._dispatcher
+
+
+@contextlib.contextmanager
+def numba_threads(count: int):
+    """Within the block, parallel kernels called from this thread run on `count` threads (at
+    most numba's pool); the setting is numba's per thread, restored on leaving."""
+    numba = _numba()
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(count, numba.config.NUMBA_NUM_THREADS))
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+
+
+def kernel(**options):
+    """Decorator: a `Kernel` of the function, compiled with ``numba.njit(**options)``."""
+    return lambda function: Kernel(function, options)
+
+
+@functools.cache
+def _numba():
+    """numba, imported on the first compilation, with kernels typed as their dispatchers (so
+    that a kernel calling another is compiled as numba compiles calls between its own)."""
+    import numba
+    from numba.core import types as numba_types
+    from numba.extending import typeof_impl
+
+    @typeof_impl.register(Kernel)
+    def _typeof_kernel(value, context):
+        return numba_types.Dispatcher(value.dispatcher)
+
+    return numba
