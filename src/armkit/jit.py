@@ -10,10 +10,11 @@ as Python costs microseconds to milliseconds for one configuration or one target
 - ``kernel.light(*args)``, for a call with little work (one configuration, one target), runs
   the kernel's Python function until the kernel is compiled or its Python runs have taken
   `PYTHON_BUDGET` seconds in all; from then on, the compiled kernel. The kernels it calls run
-  as Python too. ``kernel.sized(items, *args)`` is light for at most `FEW` items of work
-  (configurations, targets), compiled for more. A math error that numba would answer with NaN (``math.acos(1.5)``, a
+  as Python too. A math error that numba would answer with NaN (``math.acos(1.5)``, a
   division by zero, the sine of infinity) ends the Python run, and the call is made again
   compiled.
+- ``kernel.sized(items, *args, few=FEW)`` is light for at most `few` items of work
+  (configurations, targets, samples: the caller knows what one costs), compiled for more.
 
 A process whose light calls never add up to the budget compiles none of them and never imports
 numba; one that makes many of them pays at most the budget before compiling, as it would have
@@ -57,6 +58,15 @@ def _mode_from_environment() -> str:
 mode = _mode_from_environment()
 
 
+def set_mode(new_mode: str) -> None:
+    """Choose the tiers of light calls from now on: "auto", "compiled" or "python" (see the
+    module's docstring); a kernel already compiled stays compiled."""
+    global mode
+    if new_mode not in MODES:
+        raise InputError(f"mode: expected one of {', '.join(MODES)}, found {new_mode!r}")
+    mode = new_mode
+
+
 class _Tier(threading.local):
     """Whether this thread is inside a Python run of a kernel."""
 
@@ -98,6 +108,11 @@ class Kernel:
             return self.py_func(*args)
         return self.compiled()(*args)
 
+    @property
+    def is_compiled(self) -> bool:
+        """Whether calls from Python now go to the compiled kernel."""
+        return self._compiled
+
     def light(self, *args):
         """Call with little work: as Python while that is cheaper than compiling (see above)."""
         if self._compiled or _tier.python:
@@ -116,9 +131,9 @@ class Kernel:
             self.python_seconds += time.perf_counter() - start
         return self.compiled()(*args)
 
-    def sized(self, items: int, *args):
-        """Call for `items` items of work: `light` for at most `FEW`, else compiled."""
-        if items <= FEW:
+    def sized(self, items: int, *args, few: int = FEW):
+        """Call for `items` items of work: `light` for at most `few`, else compiled."""
+        if items <= few:
             return self.light(*args)
         return self(*args)
 
@@ -143,6 +158,7 @@ class Kernel:
         if not self._compiled:
             dispatcher = self.dispatcher
             type(self).__call__ = staticmethod(dispatcher)
+            self.light = dispatcher         # shadows the method: no Python frame either
             self._compiled = True
         return self._dispatcher
 

@@ -30,6 +30,8 @@ _jit = kernel(cache=True, nogil=True)
 _inline = kernel(inline="always")
 _pjit = kernel(cache=True, nogil=True, parallel=True)
 
+LIGHT_CONFIGURATIONS = 1024     # a batch run as Python before its kernel is compiled (about
+#                                 50 us a configuration: `armkit.jit`)
 GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: below this, the
 #                     start-up of a second thread costs more than the half batch it takes)
 
@@ -216,7 +218,7 @@ def run(serial, parallel, Q: np.ndarray, *args) -> None:
     (`armkit.jit`)."""
     threads = threads_for(Q.shape[0], GRAIN)
     if threads == 1:
-        serial.sized(Q.shape[0], Q, *args)
+        serial.sized(Q.shape[0], Q, *args, few=LIGHT_CONFIGURATIONS)
         return
     with numba_threads(threads):
         parallel(Q, *args)

@@ -45,8 +45,8 @@ def pose_and_jacobian(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
             and q.flags.c_contiguous):
         # One configuration from Python: straight to the kernel, which checks finiteness.
         T, J = np.empty((4, 4)), np.empty((6, q.shape[0]))
-        if _kernels.pose_jacobian_one.light(q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale,
-                                      T, J):
+        if _kernels.pose_jacobian_one.light(q, k.kinds, k.offsets, k.pre, k.links, k.source,
+                                            k.scale, T, J):
             return T, J
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)

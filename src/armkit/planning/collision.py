@@ -534,7 +534,7 @@ def obstacle_distance(scene: Scene, a: ArrayLike, b: ArrayLike) -> NDArray:
     k = scene_kernel(scene)
     a, b = np.asarray(a, float), np.asarray(b, float)
     out = np.empty(len(scene))
-    obstacle_distances(k.kind, np.ascontiguousarray(k.inverse), k.dims, a, b, out)
+    obstacle_distances.light(k.kind, np.ascontiguousarray(k.inverse), k.dims, a, b, out)
     return out
 
 
@@ -606,6 +606,7 @@ def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
 
 
 _NONE = np.empty(0)       # "one state, return it": nothing is written to it
+LIGHT_STATES = 1024       # states checked as Python before the kernel is compiled (`armkit.jit`)
 _NO_QUEUE = np.empty((4, 0))      # the edge test makes its own
 QUEUE_SIZE = 1024                 # the planners' edge-test work: longer edges make their own
 
@@ -705,7 +706,7 @@ class CollisionChecker:
         F, I = self.model
         if q.shape == (self.n,) and q.flags.c_contiguous and q.flags.writeable:
             # One state: nothing allocated.
-            f = states_kernel(q, F, I, floor, cap, _NONE)
+            f = states_kernel.light(q, F, I, floor, cap, _NONE)
             if math.isnan(f):
                 raise InputError("q: expected finite joint values, found NaN or inf")
             return f
@@ -713,7 +714,8 @@ class CollisionChecker:
             joint_array(self.robot, q)                          # raises the precise error
         q = _writable(q)
         out = np.empty(q.shape[:-1])
-        states_kernel(q.reshape(-1), F, I, floor, cap, out.reshape(-1))
+        states_kernel.sized(out.size, q.reshape(-1), F, I, floor, cap, out.reshape(-1),
+                            few=LIGHT_STATES)
         if np.isnan(out).any():
             raise InputError("q: expected finite joint values, found NaN or inf")
         return out
@@ -734,7 +736,7 @@ class CollisionChecker:
             if flags.c_contiguous and flags.writeable:           # one state, straight in
                 F, I = self.model
                 r = self.resolution
-                f = states_kernel(q, F, I, r, self._valid_cap, _NONE)
+                f = states_kernel.light(q, F, I, r, self._valid_cap, _NONE)
                 if f > r:
                     return np.True_
                 if math.isnan(f):
@@ -752,15 +754,15 @@ class CollisionChecker:
         """`valid` for states (k, n) already checked for shape (the planners' call)."""
         Q = _writable(Q)
         out = np.empty(Q.shape[0])
-        states_kernel(Q.reshape(-1), self.model[0], self.model[1], self.resolution,
-                      self._valid_cap, out)
+        states_kernel.sized(Q.shape[0], Q.reshape(-1), self.model[0], self.model[1],
+                            self.resolution, self._valid_cap, out, few=LIGHT_STATES)
         return out > self.resolution
 
     def polyline_free(self, path: NDArray) -> tuple[bool, int]:
         """Whether every waypoint of path (k, n) and every edge between them is certified free
         (no shape checks: the planners' call), and the states checked."""
         path = _writable(path)
-        free, checked = polyline_kernel(path, self.model[0], self.model[1], self.resolution,
+        free, checked = polyline_kernel.light(path, self.model[0], self.model[1], self.resolution,
                                         _NO_QUEUE)
         return bool(free), int(checked)
 

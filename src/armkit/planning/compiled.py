@@ -510,7 +510,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     status = RUNNING
     while True:
         stop = min(int(counters[ITERATIONS]) + chunk, max_iterations)
-        status = grow(stop, margin, step, goal_bias, gamma, checker.resolution, goals,
+        status = grow.light(stop, margin, step, goal_bias, gamma, checker.resolution, goals,
                       lower, upper, nodes, parent, cost, clear, size, child, sibling, goal_of,
                       goal_nodes, counters, best, rng, queue, F, I)
         if status == FOUND:
@@ -527,7 +527,7 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
             continue
         if counters[ITERATIONS] >= max_iterations or time.perf_counter() - t0 > time_limit:
             break
-        chunk = min(2 * chunk, 4096)
+        chunk = min(2 * chunk, 4096 if grow.is_compiled else 256)
     iterations, checked = int(counters[ITERATIONS]), int(counters[CHECKED])
     end_a, end_b = int(counters[END_A]), int(counters[END_B])
     if status == FOUND and planner == "rrtconnect":
@@ -550,8 +550,7 @@ def shortcut_compiled(checker: CollisionChecker, path: NDArray, *, seed: int | N
     length."""
     counters = np.zeros(1, np.int64)
     F, I = checker.model
-    out = shortcut_kernel(np.ascontiguousarray(path, dtype=float), int(tries), float(min_gain),
-                          rng_state(seed),
-                          checker.resolution, np.empty((4, QUEUE_SIZE)), F, I,
-                          counters)
+    out = shortcut_kernel.light(np.ascontiguousarray(path, dtype=float), int(tries),
+                                float(min_gain), rng_state(seed), checker.resolution,
+                                np.empty((4, QUEUE_SIZE)), F, I, counters)
     return out, int(counters[0])

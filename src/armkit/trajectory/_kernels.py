@@ -20,6 +20,7 @@ _pjit = kernel(cache=True, nogil=True, parallel=True)
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
 _CHUNK = 16384              # samples per parallel task
+LIGHT_SAMPLES = 4096       # samples an evaluation runs as Python before its kernel is compiled
 _BLOCK = 256                # samples of one piece evaluated together
 _RUN = 8                    # shorter runs of samples in one piece go one by one
 
@@ -102,10 +103,11 @@ def evaluate_parallel(breaks, table, t, out):
 
 def run_evaluate(breaks: np.ndarray, table: np.ndarray, t: np.ndarray, out: np.ndarray) -> None:
     """Call the serial evaluation, or the parallel one on as many threads as the number of
-    samples and the idle cores are worth (`armkit.threads.threads_for`)."""
+    samples and the idle cores are worth (`armkit.threads.threads_for`); up to LIGHT_SAMPLES
+    samples run light (`armkit.jit`)."""
     threads = threads_for(t.shape[0], PARALLEL_FROM)
     if threads == 1:
-        evaluate(breaks, table, t, out)
+        evaluate.sized(t.shape[0], breaks, table, t, out, few=LIGHT_SAMPLES)
         return
     with numba_threads(threads):
         evaluate_parallel(breaks, table, t, out)

@@ -175,7 +175,7 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
                          f"{profile.duration.shape}")
     if not profile.duration > 0:                    # the goal is the start
         return at_rest(profile.q0, label)
-    breaks, c = _kernels.profile_pieces(profile.order, np.ascontiguousarray(profile.times),
+    breaks, c = _kernels.profile_pieces.light(profile.order, np.ascontiguousarray(profile.times),
                                         np.ascontiguousarray(profile.values),
                                         np.ascontiguousarray(profile.q0, dtype=float), 1e-12)
     breaks.setflags(write=False)                # fresh and ours: the Trajectory keeps them
@@ -243,7 +243,7 @@ def _profile(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     if one is not None:
         n = one.shape[2]
         times, values = np.empty((1, n, K + 1)), np.empty((1, n, K))
-        bad = _kernels.profile_timing(order, one, sync == "phase", times, values)
+        bad = _kernels.profile_timing.light(order, one, sync == "phase", times, values)
         if bad:
             _refuse(bad, order, one)
         times = times[0]
@@ -251,8 +251,9 @@ def _profile(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     arrays = _problem(q0, qf, vmax, amax, jmax)
     lead, n = arrays.shape[1:], arrays.shape[-1]
     times, values = np.empty(lead + (K + 1,)), np.empty(lead + (K,))
-    bad = _kernels.profile_timing(order, arrays.reshape(5, -1, n), sync == "phase",
-                                  times.reshape(-1, n, K + 1), values.reshape(-1, n, K))
+    bad = _kernels.profile_timing.sized(arrays[0].size, order, arrays.reshape(5, -1, n),
+                                        sync == "phase", times.reshape(-1, n, K + 1),
+                                        values.reshape(-1, n, K))
     if bad:
         _refuse(bad, order, arrays)
     return Profile(times[..., 0, -1].copy(), times, values, order, arrays[0], arrays[1])

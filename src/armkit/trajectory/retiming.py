@@ -182,7 +182,7 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
     with np.errstate(divide="ignore"):
         end_top = min(xv[-1], np.min(A / np.abs(ddq[-1]))) if still[1] else 0.0
     x = np.empty(s.shape[0])
-    stuck = _kernels.topp(dq, ddq, xv, A, ds, end_top, bool(still[0]), x)
+    stuck = _kernels.topp.light(dq, ddq, xv, A, ds, end_top, bool(still[0]), x)
     if stuck >= 0:
         return _failed("exceeds the limits", s[stuck])
     sd = np.sqrt(np.maximum(x, 0.0))

@@ -164,7 +164,7 @@ class SeedBank:
         """Starts (N, count, n) for targets (N, 4, 4): the `count` samples nearest each target
         by the features the mask uses, nearest first."""
         best = np.empty((targets.shape[0], min(count, self.q.shape[0])), dtype=np.int64)
-        _nearest.sized(targets.shape[0], np.ascontiguousarray(features(targets, self.length)), self.features,
-                 feature_columns(mask), self.lo, self.inv, self.cells, self.order, self.start,
-                 best)
+        _nearest.sized(targets.shape[0], np.ascontiguousarray(features(targets, self.length)),
+                       self.features, feature_columns(mask), self.lo, self.inv, self.cells,
+                       self.order, self.start, best)
         return self.q[best]

@@ -560,7 +560,8 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        _kernels.poses.sized(flat.shape[0], flat, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out)
+        _kernels.poses.sized(flat.shape[0], flat, k.kinds, k.offsets, k.pre, k.links,
+                             k.source, k.scale, out, few=_kernels.LIGHT_CONFIGURATIONS)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:

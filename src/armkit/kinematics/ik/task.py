@@ -236,5 +236,6 @@ def task_errors(T: ArrayLike, T_target: ArrayLike, mask: NDArray) -> tuple[NDArr
     flat = np.broadcast_to(T, lead + (4, 4)).reshape(-1, 4, 4).copy()
     flat_target = np.broadcast_to(T_target, lead + (4, 4)).reshape(-1, 4, 4).copy()
     position, rotation = np.empty(flat.shape[0]), np.empty(flat.shape[0])
-    _errors_batch.sized(flat.shape[0], flat, flat_target, np.asarray(mask, dtype=np.int64), position, rotation)
+    _errors_batch.sized(flat.shape[0], flat, flat_target, np.asarray(mask, dtype=np.int64),
+                        position, rotation, few=1024)
     return position.reshape(lead), rotation.reshape(lead)
