@@ -16,7 +16,10 @@ its 8 closed-form solutions (`ik_solutions`), and `ik` of one tool_changer_6dof 
 Levenberg-Marquardt); `workspace` of inspection_6dof with 10,000 samples; `spline` 4-5-5
 through paper 4's Table 1, sampled at 100 times; one 6-joint `jerk_limited` motion; `retime`
 of 10 waypoints. ``--calls`` runs some of them only. Beside the wall time of the first call on
-an empty cache, its CPU time (``time.process_time``), which a busy machine inflates less.
+an empty cache, its CPU time (``time.process_time``), which a busy machine inflates less. The
+reference: the same first call compiled from the start (``ARMKIT_JIT=compiled``, numba's own
+behaviour, what every call did before `armkit.jit`) into an empty cache; the ratio is its time
+over the default's.
 Their inputs are built without armkit's kernels, so each process compiles only what its own
 call needs.
 """
@@ -85,15 +88,15 @@ elif what == "retime":
     assert armkit.retime(waypoints, robot.velocity_limits, robot.acceleration_limits).success
 done, cpu_done = time.perf_counter(), time.process_time()
 print(json.dumps({"import": imported - start, "robot": loaded - imported, "call": done - loaded,
-                  "call_cpu": cpu_done - cpu_loaded}))
+                  "call_cpu": cpu_done - cpu_loaded, "numba": "numba" in sys.modules}))
 """
 
 CALLS = ("import", "fk", "jacobian", "ik closed form", "ik_solutions", "ik numeric", "workspace",
          "spline", "jerk_limited", "retime")
 
 
-def run(what: str, cache: str) -> dict[str, float]:
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+def run(what: str, cache: str, mode: str = "auto") -> dict[str, float]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "ARMKIT_JIT": mode}
     done = subprocess.run([sys.executable, "-c", CHILD, what], env=env, capture_output=True,
                           text=True)
     if done.returncode:
@@ -111,20 +114,32 @@ def main() -> None:
     print(load())
     cold: dict[str, list[dict]] = {c: [] for c in calls}
     warm: dict[str, list[dict]] = {c: [] for c in calls}
+    compiled: dict[str, list[dict]] = {c: [] for c in calls}
     for _ in range(args.rounds):
         for what in calls:
             with tempfile.TemporaryDirectory() as cache:
                 cold[what].append(run(what, cache))
                 warm[what].append(run(what, cache))
+            if what != "import":
+                with tempfile.TemporaryDirectory() as cache:
+                    compiled[what].append(run(what, cache, "compiled"))
     print(load())
-    print(f"\n{'first call':16} {'empty numba cache':>26} {'its CPU time':>26} "
-          f"{'warm numba cache':>26}")
+    print(f"\n{'first call':16} {'empty numba cache':>24} {'its CPU time':>24} "
+          f"{'warm numba cache':>24} {'compiled, empty cache':>24} {'ratio':>20}")
     for what in calls:
         key = "import" if what == "import" else "call"
         a = Spread(tuple(r[key] for r in cold[what]))
         cpu = Spread(tuple(r["call_cpu"] for r in cold[what])).text("s") if key == "call" else ""
         b = Spread(tuple(r[key] for r in warm[what]))
-        print(f"{what:16} {a.text('s'):>26} {cpu:>26} {b.text('s'):>26}")
+        c = ratio = ""
+        if compiled[what]:
+            reference = Spread(tuple(r[key] for r in compiled[what]))
+            c = reference.text("s")
+            ratio = Spread(tuple(r[key] / q[key] for r, q in zip(compiled[what], cold[what])))
+            ratio = f"{reference.median / a.median:.0f}x [{ratio.min:.0f}-{ratio.max:.0f}]"
+        numba = sum(r["numba"] for r in cold[what] + warm[what])
+        print(f"{what:16} {a.text('s'):>24} {cpu:>24} {b.text('s'):>24} {c:>24} {ratio:>20}"
+              + (f"  (numba imported in {numba} of {2 * len(cold[what])})" if numba else ""))
     robots = Spread(tuple(r["robot"] for c in calls if c != "import" for r in cold[c] + warm[c]))
     print(f"\n`import armkit` is the import alone; every other row is the call alone, after the"
           f"\nimport and `armkit.robot(...)` (loading a built-in robot: {robots.text('s')}).")

@@ -89,15 +89,21 @@ def test_a_parallel_kernel_is_the_same_loop_in_both_tiers():
     np.testing.assert_array_equal(python, compiled)
 
 
-def test_modes_are_checked():
+def test_modes_are_checked(tmp_path):
     with pytest.raises(InputError, match="mode: expected one of auto, compiled, python, "
                                          "found 'fast'"):
         jit.set_mode("fast")
-    result = subprocess.run([sys.executable, "-c", "import armkit.jit"], capture_output=True,
-                            text=True, env={**os.environ, "ARMKIT_JIT": "fast"})
-    assert result.returncode != 0
-    assert ("ARMKIT_JIT: expected one of auto, compiled, python, found 'fast'"
-            in result.stderr)
+    # From the environment: read at the first call that needs it, reported as bad input.
+    cases = ((["fk", "ur5", "0", "0", "0", "0", "0", "0"], "ARMKIT_JIT", "fast",
+              "armkit: ARMKIT_JIT: expected one of auto, compiled, python, found 'fast'"),
+             (["workspace", "ur5", "-n", "1e5", "--out", str(tmp_path)], "ARMKIT_NUM_THREADS",
+              "many", "armkit: ARMKIT_NUM_THREADS: expected a whole number of threads >= 1, "
+                      "found 'many'"))
+    for argv, variable, value, line in cases:
+        result = subprocess.run([sys.executable, "-m", "armkit", *argv], capture_output=True,
+                                text=True, env={**os.environ, variable: value})
+        assert result.returncode == 2, result.stderr
+        assert result.stderr.strip() == line
 
 
 # One process computes every light entry point's results as Python (never importing numba),

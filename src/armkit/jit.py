@@ -22,7 +22,7 @@ from the first call. Both tiers run the same source: tests/test_jit.py holds the
 results. A kernel declared ``parallel=True`` writes its parallel loop as ``prange``, which is
 ``range`` in Python and numba's ``prange`` when compiled.
 
-The environment variable ``ARMKIT_JIT`` (read at import) chooses: ``auto`` (the default, as
+The environment variable ``ARMKIT_JIT`` (read at the first light call) or `set_mode` chooses: ``auto`` (the default, as
 above), ``compiled`` (every call compiled, numba's own behaviour) or ``python`` (light calls
 always Python; for debugging a kernel).
 """
@@ -55,7 +55,14 @@ def _mode_from_environment() -> str:
     return text
 
 
-mode = _mode_from_environment()
+mode: str | None = None     # from ARMKIT_JIT at the first light call (where a bad value is
+#                             reported as that call's InputError), or `set_mode`
+
+
+def _mode() -> str:
+    global mode
+    mode = _mode_from_environment()
+    return mode
 
 
 def set_mode(new_mode: str) -> None:
@@ -117,7 +124,8 @@ class Kernel:
         """Call with little work: as Python while that is cheaper than compiling (see above)."""
         if self._compiled or _tier.python:
             return self(*args)
-        if mode == "compiled" or (mode == "auto" and self.python_seconds >= PYTHON_BUDGET):
+        chosen = mode or _mode()
+        if chosen == "compiled" or (chosen == "auto" and self.python_seconds >= PYTHON_BUDGET):
             return self.compiled()(*args)
         start = time.perf_counter()
         _tier.python = True

@@ -4,7 +4,8 @@ A batch is split over threads only when each thread gets enough samples to pay f
 it, and never over more threads than there are idle cores: on a machine whose cores are busy
 with other work, a second thread waits for a core and makes the batch slower than one thread
 (measured in benchmarks/fk.py). `set_num_threads` (or the environment variable
-``ARMKIT_NUM_THREADS``, read at import) sets an upper bound that the load no longer lowers.
+``ARMKIT_NUM_THREADS``, read at the first batch) sets an upper bound that the load no longer
+lowers.
 """
 
 from __future__ import annotations
@@ -25,7 +26,9 @@ def _from_environment() -> int | None:
     return int(text)
 
 
-_chosen: int | None = _from_environment()
+_UNREAD = object()
+_chosen: int | None | object = _UNREAD      # the environment is read at the first batch, where a bad
+#                                    value is reported as the call's InputError
 
 
 def set_num_threads(n: int | None) -> None:
@@ -61,6 +64,9 @@ def set_num_threads(n: int | None) -> None:
 
 def get_num_threads() -> int:
     """The bound set by `set_num_threads` or ``ARMKIT_NUM_THREADS``; else the idle cores now."""
+    global _chosen
+    if _chosen is _UNREAD:
+        _chosen = _from_environment()
     return _chosen if _chosen is not None else idle_cores()
 
 
