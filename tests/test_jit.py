@@ -3,15 +3,18 @@ compiled, and both tiers give the same results bit for bit."""
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 import os
+import pickle
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
+import armkit
 from armkit import jit
 from armkit.errors import InputError
 from armkit.jit import Kernel, kernel, prange
@@ -77,6 +80,14 @@ def test_a_math_error_in_python_is_answered_compiled():
     assert not acos.is_compiled
     assert math.isnan(acos.light(1.5))
     assert acos.is_compiled
+
+
+def test_a_kernel_pickles_by_name():
+    solver = armkit.IKSolver(armkit.robot("ur5"))       # holds its closed form's kernel
+    assert pickle.loads(pickle.dumps(_twice)) is _twice
+    again = pickle.loads(pickle.dumps(solver))
+    assert again.family.kernel is solver.family.kernel
+    assert copy.deepcopy(_twice) is _twice
 
 
 def test_a_parallel_kernel_is_the_same_loop_in_both_tiers():

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import importlib
 import os
 import threading
 import time
@@ -110,6 +111,11 @@ class Kernel:
     def __repr__(self) -> str:
         return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
 
+    def __reduce__(self):
+        # By name, as a function pickles: a result or solver holding a kernel can be pickled
+        # (Dask sends them to workers) and comes back holding the module's own kernel.
+        return _named, (self.py_func.__module__, self.py_func.__qualname__)
+
     def __call__(self, *args):
         if _tier.python:
             return self.py_func(*args)
@@ -182,6 +188,10 @@ def numba_threads(count: int):
         yield
     finally:
         numba.set_num_threads(before)
+
+
+def _named(module: str, qualname: str) -> Kernel:
+    return getattr(importlib.import_module(module), qualname)
 
 
 def kernel(**options):
