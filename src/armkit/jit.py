@@ -22,9 +22,10 @@ from the first call. Both tiers run the same source: tests/test_jit.py holds the
 results. A kernel declared ``parallel=True`` writes its parallel loop as ``prange``, which is
 ``range`` in Python and numba's ``prange`` when compiled.
 
-The environment variable ``ARMKIT_JIT`` (read at the first light call) or `set_mode` chooses: ``auto`` (the default, as
-above), ``compiled`` (every call compiled, numba's own behaviour) or ``python`` (light calls
-always Python; for debugging a kernel).
+The environment variable ``ARMKIT_JIT`` (read at the first light call) or `set_mode` chooses:
+``auto`` (the default, as above), ``compiled`` (every call compiled, numba's own behaviour;
+benchmarks of compiled speed use it) or ``python`` (light calls always Python; for debugging
+a kernel).
 """
 
 from __future__ import annotations
@@ -49,20 +50,18 @@ _PYTHON_ERRORS = (ArithmeticError, ValueError)      # where numba's math returns
 prange = range
 
 
-def _mode_from_environment() -> str:
-    text = os.environ.get("ARMKIT_JIT", "").strip() or "auto"
-    if text not in MODES:
-        raise InputError(f"ARMKIT_JIT: expected one of {', '.join(MODES)}, found {text!r}")
-    return text
-
-
 mode: str | None = None     # from ARMKIT_JIT at the first light call (where a bad value is
 #                             reported as that call's InputError), or `set_mode`
 
 
 def _mode() -> str:
+    """The mode, read from ``ARMKIT_JIT`` if not set yet."""
     global mode
-    mode = _mode_from_environment()
+    if mode is None:
+        text = os.environ.get("ARMKIT_JIT", "").strip() or "auto"
+        if text not in MODES:
+            raise InputError(f"ARMKIT_JIT: expected one of {', '.join(MODES)}, found {text!r}")
+        mode = text
     return mode
 
 
