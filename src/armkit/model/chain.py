@@ -385,6 +385,13 @@ class KernelChain:
     motion; links (n_joints, 4, 4): from joint i's motion to joint i+1's (the last ends at the
     tool); after (n_joints - 1, 4, 4): from joint i's motion to link frame i (the last link
     frame is the tool).
+
+    The kernels take the same chain packed in two read-only arrays, `floats` and `ints` (two
+    arrays cross numba's dispatcher in a fraction of the time of six, which is most of the
+    cost of one configuration's pose): ints (2 n_joints,) is kinds then source; floats
+    (2 n_joints + 12 + 12 n_joints,) is offsets, scale, the top three rows of pre (3, 4)
+    row by row, then those of each link (n_joints, 3, 4) (the last row of a rigid transform is
+    always 0 0 0 1).
     """
 
     kinds: NDArray
@@ -394,6 +401,17 @@ class KernelChain:
     after: NDArray
     source: NDArray
     scale: NDArray
+    floats: NDArray = field(init=False, repr=False)
+    ints: NDArray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        floats = np.concatenate([self.offsets, self.scale, np.reshape(self.pre[:3], -1),
+                                 np.reshape(self.links[:, :3], -1)]).astype(float)
+        ints = np.concatenate([self.kinds, self.source]).astype(np.int64)
+        floats.setflags(write=False)
+        ints.setflags(write=False)
+        object.__setattr__(self, "floats", floats)
+        object.__setattr__(self, "ints", ints)
 
     def motion_ends(self, lower: ArrayLike, upper: ArrayLike) -> NDArray:
         """(2, n_joints): each moving joint's motion ``scale * q[source] + offset`` at the

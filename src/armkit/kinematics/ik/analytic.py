@@ -387,9 +387,9 @@ def _fold(v, lower, upper, ref):
 def _check(q, T, q_ref, limits, chain, mask, tol, errors, flags, pose):
     """Branches q (K, n) of target T folded in place; errors (K, 2) position and rotation by
     FK; flags (K, 4): real, reached (within tol under the mask), inside the limits, and valid
-    (reached and not equal to an earlier valid branch). chain: the `KernelChain`'s arrays
-    (kinds, offsets, pre, links, source, scale)."""
-    kinds, offsets, pre, links, source, scale = chain
+    (reached and not equal to an earlier valid branch). chain: the `KernelChain` packed
+    (floats, ints)."""
+    F, I = chain
     K, n = q.shape
     for b in range(K):
         real = True
@@ -402,7 +402,7 @@ def _check(q, T, q_ref, limits, chain, mask, tol, errors, flags, pose):
                 v = _fold(v, limits[0, j], limits[1, j], q_ref[j])
             q[b, j] = v
             inside &= limits[0, j] - 1e-12 <= v <= limits[1, j] + 1e-12
-        _kernels.pose_one(q[b], kinds, offsets, pre, links, source, scale, pose)
+        _kernels.pose_one(q[b], F, I, pose)
         pe, re = task_errors_one(pose, T, mask)
         errors[b, 0], errors[b, 1] = pe, re
         reached = real and pe < tol[0] and re < tol[1]
@@ -651,6 +651,6 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
     family.kernel(family.geometry, targets, q_ref, family.limits,
-                  (k.kinds, k.offsets, k.pre, k.links, k.source, k.scale), mask.astype(np.int64),
+                  (k.floats, k.ints), mask.astype(np.int64),
                   np.array([tol_position, tol_rotation]), q, errors, flags)
     return q, errors, flags

@@ -148,7 +148,7 @@ class SeedBank:
         # one thread, and thread start-up on a busy machine would cost ten times that.
         T = np.empty((samples, 4, 4))
         k = robot.chain.kernel
-        _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, T)
+        _kernels.poses(Q, k.floats, k.ints, T)
         P = np.ascontiguousarray(T[:, :3, 3])
         G = max(1, round(samples ** (1 / 3)))
         lo = P.min(axis=0)

@@ -560,7 +560,7 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        _kernels.poses(flat, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out)
+        _kernels.poses(flat, k.floats, k.ints, out)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:
