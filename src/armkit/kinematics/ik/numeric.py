@@ -35,6 +35,7 @@ call.
 
 from __future__ import annotations
 
+import itertools
 import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -385,10 +386,24 @@ class KernelArgs:
                    _read_only(np.array([lower_w, upper, turn, sample_lo, sample_hi], float)))
 
 
+def _mask_arrays(flags: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    mask = np.array(flags, dtype=np.int64)
+    rows = np.flatnonzero(mask).astype(np.int64)
+    mask.setflags(write=False)
+    rows.setflags(write=False)
+    return mask, rows
+
+
+# The kernel form (mask, rows) of each of the 63 masks, fixed at import: a single solve then
+# looks its mask up instead of building two small arrays.
+_MASK_ARRAYS = {flags: _mask_arrays(flags) for flags in itertools.product((0, 1), repeat=6)
+                if any(flags)}
+
+
 def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tuple:
     """The task group of the kernels: (mask (6,) int, rows (m,) int, tol_p, tol_r)."""
-    return (mask.astype(np.int64), np.flatnonzero(mask).astype(np.int64), float(tol_position),
-            float(tol_rotation))
+    flags, rows = _MASK_ARRAYS[tuple(mask.tolist())]
+    return (flags, rows, float(tol_position), float(tol_rotation))
 
 
 def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task: tuple,

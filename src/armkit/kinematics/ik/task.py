@@ -52,12 +52,14 @@ def as_mask(mask: str | ArrayLike) -> NDArray:
     return flags.astype(bool)
 
 
+_NAMES = {flags: name for name, flags in NAMED_MASKS.items()}
+
+
 def mask_name(mask: NDArray) -> str:
     """The mask's name, or its flags as a string of 0s and 1s."""
-    for name, flags in NAMED_MASKS.items():
-        if tuple(mask.astype(int)) == flags:
-            return name
-    return "".join(str(int(f)) for f in mask)
+    flags = tuple(mask.tolist())        # bools hash and compare as the 0s and 1s of the keys
+    name = _NAMES.get(flags)
+    return name if name is not None else "".join(str(int(f)) for f in flags)
 
 
 @_inner
