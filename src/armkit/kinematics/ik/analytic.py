@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.kinematics import _kernels
-from armkit.kinematics.ik.task import task_errors_one
+from armkit.kinematics.ik.task import mask_forms, task_errors_one
 from armkit.model.chain import Chain
 
 PARALLEL = 1e-9          # |w_i x w_j| below this: parallel axes
@@ -516,8 +516,9 @@ def _meeting_point(w1, r1, w2, r2) -> tuple[float, float, float]:
 
 def _normal_to(a) -> tuple[float, float, float]:
     """A unit vector normal to a (unit, 3)."""
-    k = min(range(3), key=lambda i: abs(a[i]))
-    v = _axpy3(-a[k], a, tuple(float(i == k) for i in range(3)))
+    x, y, z = abs(a[0]), abs(a[1]), abs(a[2])
+    k = (0 if x <= z else 2) if x <= y else (1 if y <= z else 2)     # min's first smallest
+    v = _axpy3(-a[k], a, ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))[k])
     return _axpy3(1.0 / math.hypot(*v) - 1.0, v, v)
 
 
@@ -548,8 +549,10 @@ def _rotation_flags(k: int, pointing: bool) -> tuple[int, ...]:
 
 def _family(chain: Chain, name: str, mask: tuple[int, ...], branches: int, rows: list,
             kernel) -> Family:
-    geometry = np.array(rows, dtype=float)
-    limits = np.array((chain.lower, chain.upper, chain.revolute), dtype=float)
+    # One flat list and one concatenation: NumPy builds a (G, 3) array from nested tuples
+    # several times slower.
+    geometry = np.array([x for row in rows for x in row], dtype=float).reshape(-1, 3)
+    limits = np.concatenate((chain.lower, chain.upper, chain.revolute)).reshape(3, -1)
     geometry.setflags(write=False)
     limits.setflags(write=False)
     return Family(name, mask, branches, geometry, kernel, limits)
@@ -651,6 +654,6 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
     family.kernel(family.geometry, targets, q_ref, family.limits,
-                  (k.floats, k.ints), mask.astype(np.int64),
+                  (k.floats, k.ints), mask_forms(mask).ints,
                   np.array([tol_position, tol_rotation]), q, errors, flags)
     return q, errors, flags

@@ -35,7 +35,6 @@ call.
 
 from __future__ import annotations
 
-import itertools
 import math
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -44,7 +43,7 @@ import numba
 import numpy as np
 
 from armkit.kinematics._kernels import pose_jacobian_one
-from armkit.kinematics.ik.task import task_errors_one, task_residual
+from armkit.kinematics.ik.task import mask_forms, task_errors_one, task_residual
 from armkit.threads import threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
@@ -348,15 +347,6 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
 
 # --- the Python side --------------------------------------------------------------------------
 
-def _read_only(a) -> np.ndarray:
-    """a as a C-contiguous read-only array (a copy only if needed)."""
-    if isinstance(a, np.ndarray) and a.flags.c_contiguous and not a.flags.writeable:
-        return a
-    a = np.array(a)
-    a.setflags(write=False)
-    return a
-
-
 def _writable(a, dtype=float) -> np.ndarray:
     """a as a C-contiguous writable array (a copy only if needed): the kernels see one type
     whatever the caller passed, and compile once."""
@@ -377,33 +367,16 @@ class KernelArgs:
 
     @classmethod
     def of(cls, robot) -> "KernelArgs":
-        chain, k = robot.chain, robot.chain.kernel
-        lower, upper = chain.lower, chain.upper
-        turn = chain.wraps
-        lower_w = np.where(turn & ~np.isfinite(lower), -np.pi, lower)
-        sample_lo, sample_hi = chain.sampling_limits
-        return cls((k.floats, k.ints),
-                   _read_only(np.array([lower_w, upper, turn, sample_lo, sample_hi], float)))
-
-
-def _mask_arrays(flags: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    mask = np.array(flags, dtype=np.int64)
-    rows = np.flatnonzero(mask).astype(np.int64)
-    mask.setflags(write=False)
-    rows.setflags(write=False)
-    return mask, rows
-
-
-# The kernel form (mask, rows) of each of the 63 masks, fixed at import: a single solve then
-# looks its mask up instead of building two small arrays.
-_MASK_ARRAYS = {flags: _mask_arrays(flags) for flags in itertools.product((0, 1), repeat=6)
-                if any(flags)}
+        """The robot's chain packed (`KernelChain.floats`, `KernelChain.ints`) and its
+        `Chain.kernel_limits`: arrays the model computes once."""
+        k = robot.chain.kernel
+        return cls((k.floats, k.ints), robot.chain.kernel_limits)
 
 
 def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tuple:
     """The task group of the kernels: (mask (6,) int, rows (m,) int, tol_p, tol_r)."""
-    flags, rows = _MASK_ARRAYS[tuple(mask.tolist())]
-    return (flags, rows, float(tol_position), float(tol_rotation))
+    forms = mask_forms(mask)
+    return (forms.ints, forms.rows, float(tol_position), float(tol_rotation))
 
 
 def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task: tuple,

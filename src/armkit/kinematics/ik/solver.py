@@ -23,7 +23,7 @@ from armkit.kinematics.ik.choose import CRITERIA, scores
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
                                           not_converged)
 from armkit.kinematics.ik.seeds import SeedBank
-from armkit.kinematics.ik.task import as_mask, mask_name
+from armkit.kinematics.ik.task import MASK_FORMS, NAMED_MASKS, as_mask, mask_name
 from armkit.kinematics.jacobian import pose_and_jacobian
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
@@ -176,14 +176,10 @@ def reach_bound(robot: Robot) -> float:
 
     Consecutive axis points are fixed in the link between them, so the tool can be no farther
     than the sum of those distances, plus the longest stroke of each prismatic joint. A target
-    farther than this is out of reach, whatever the solver.
+    farther than this is out of reach, whatever the solver. The chain computes it once
+    (`Chain.reach`).
     """
-    chain, k = robot.chain, robot.chain.kernel
-    points = np.vstack([chain.points, chain.T_home[:3, 3]])
-    # Each prismatic moving joint (mimic ones too) strokes from its value at q = 0.
-    strokes = np.abs(k.motion_ends(chain.lower, chain.upper) - k.offsets).max(axis=0)
-    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1))
-                 + strokes[k.kinds == 1].sum())
+    return robot.chain.reach
 
 
 _UNKNOWN = object()
@@ -272,19 +268,15 @@ class IKSolver:
                                  ("threads", 1 if threads is None else threads, 1)):
             if not (isinstance(value, (int, np.integer)) and low <= value < 2**63):
                 raise InputError(f"{name}: expected a whole number >= {low}, found {value!r}")
-        object.__setattr__(self, "robot", robot)
-        object.__setattr__(self, "family", analytic.family_of(robot.chain))
-        object.__setattr__(self, "default_mask", default_mask(robot, self.family))
-        self.default_mask.setflags(write=False)
-        object.__setattr__(self, "default_name", mask_name(self.default_mask))
-        object.__setattr__(self, "_reach", None)
-        object.__setattr__(self, "_reach_point", None)
-        object.__setattr__(self, "_kernel_args", None)
-        object.__setattr__(self, "_samples", int(samples))
-        object.__setattr__(self, "_seed", int(seed))
-        object.__setattr__(self, "_threads", threads)
-        object.__setattr__(self, "_bank", None)
-        object.__setattr__(self, "_middle", None)
+        family = analytic.family_of(robot.chain)
+        # The default task's arrays are the read-only ones fixed at import (`MASK_FORMS`).
+        forms = MASK_FORMS[family.mask if family is not None
+                           else NAMED_MASKS["pose" if robot.n >= 6 else "position"]]
+        # One update of the instance's dict (`__setattr__` refuses every change).
+        self.__dict__.update(
+            robot=robot, family=family, default_mask=forms.flags, default_name=forms.name,
+            _reach_point=None, _kernel_args=None, _samples=int(samples), _seed=int(seed),
+            _threads=threads, _bank=None, _middle=None)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"IKSolver is immutable: cannot set {name}")
@@ -295,11 +287,8 @@ class IKSolver:
 
     @property
     def reach(self) -> float:
-        """`reach_bound` of the robot, m (computed on first use: a closed form does not need
-        it)."""
-        if self._reach is None:
-            object.__setattr__(self, "_reach", reach_bound(self.robot))
-        return self._reach
+        """`reach_bound` of the robot, m (`Chain.reach`, computed once by the chain)."""
+        return self.robot.chain.reach
 
     @property
     def _reach_test(self) -> tuple[float, float, float, float]:
@@ -708,10 +697,11 @@ class IKSolver:
         C, errors, flags = analytic.candidates(self.robot.chain, family, flat, np.zeros((N, n)),
                                                mask, tol_position, tol_rotation)
         if lead == ():
-            rows = np.flatnonzero(flags[0, :, 3])
-            k = len(rows)
-            return IKSolutions(C[0, rows], np.ones(k, dtype=bool), flags[0, rows, 2],
-                               errors[0, rows, 0], errors[0, rows, 1], k, family.name, name)
+            valid = flags[0, :, 3]
+            rows = valid.nonzero()[0]
+            pe, re = errors[0, rows].T
+            return IKSolutions(C[0, rows], valid[rows], flags[0, rows, 2], pe, re, len(rows),
+                               family.name, name)
         valid = flags[..., 3]
         order = np.argsort(~valid, axis=1, kind="stable")      # real rows first, in order
         take = lambda a: np.take_along_axis(a, order, axis=1)  # noqa: E731
