@@ -497,7 +497,9 @@ def _cross3(a, b) -> tuple[float, float, float]:
 
 
 def _parallel(a, b) -> bool:
-    return math.hypot(*_cross3(a, b)) < PARALLEL
+    """|a x b| < PARALLEL (the cross product written out: called a dozen times per robot)."""
+    return math.hypot(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]) < PARALLEL
 
 
 def _line_distance(w1, r1, w2, r2) -> float:
@@ -524,8 +526,8 @@ def _normal_to(a) -> tuple[float, float, float]:
 
 def _home(chain: Chain) -> tuple[list, tuple]:
     """T_home's rotation as rows, and its position."""
-    M = chain.T_home.tolist()
-    return [tuple(row[:3]) for row in M[:3]], tuple(row[3] for row in M[:3])
+    (a, b, c, x), (d, e, f, y), (g, h, i, z), _ = chain.T_home.tolist()
+    return [(a, b, c), (d, e, f), (g, h, i)], (x, y, z)
 
 
 def _pointing_axis(chain: Chain, w, r) -> int:
@@ -561,8 +563,9 @@ def _family(chain: Chain, name: str, mask: tuple[int, ...], branches: int, rows:
 def _home_inverse(chain: Chain) -> list:
     """inv(T_home) as four rows: its rotation's columns (the home rotation's rows), then its
     position."""
-    R, t0 = _home(chain)
-    return [*R, tuple(-_dot3(column, t0) for column in zip(*R))]
+    R, (x, y, z) = _home(chain)
+    (a, b, c), (d, e, f), (g, h, i) = R
+    return [*R, (-(a * x + d * y + g * z), -(b * x + e * y + h * z), -(c * x + f * y + i * z))]
 
 
 def family_of(chain: Chain) -> Family | None:
