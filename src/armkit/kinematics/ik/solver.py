@@ -697,11 +697,13 @@ class IKSolver:
         C, errors, flags = analytic.candidates(self.robot.chain, family, flat, np.zeros((N, n)),
                                                mask, tol_position, tol_rotation)
         if lead == ():
+            # `compress` on basic-indexed views: NumPy's mixed integer and array indexing
+            # (C[0, rows]) costs several times as much for a handful of rows.
             valid = flags[0, :, 3]
-            rows = valid.nonzero()[0]
-            pe, re = errors[0, rows].T
-            return IKSolutions(C[0, rows], valid[rows], flags[0, rows, 2], pe, re, len(rows),
-                               family.name, name)
+            q = C[0].compress(valid, axis=0)
+            pe, re = errors[0].T.compress(valid, axis=1)
+            return IKSolutions(q, valid.compress(valid), flags[0, :, 2].compress(valid), pe, re,
+                               len(q), family.name, name)
         valid = flags[..., 3]
         order = np.argsort(~valid, axis=1, kind="stable")      # real rows first, in order
         take = lambda a: np.take_along_axis(a, order, axis=1)  # noqa: E731
