@@ -90,7 +90,9 @@ def mask_forms(mask: NDArray) -> MaskForms:
 
 def mask_name(mask: NDArray) -> str:
     """The mask's name, or its flags as a string of 0s and 1s."""
-    return MASK_FORMS[tuple(int(f) for f in mask.tolist())].name
+    flags = tuple(int(f) for f in mask.tolist())
+    forms = MASK_FORMS.get(flags)
+    return forms.name if forms is not None else "".join(str(f) for f in flags)
 
 
 @_inner
