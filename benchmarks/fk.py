@@ -2,6 +2,7 @@
 
     python benchmarks/fk.py            # N = 1e5 and 1e6, threads, memory at 1e7 and 2e7
     python benchmarks/fk.py --quick    # N = 1e5 only, no memory runs
+    python benchmarks/fk.py --single   # one configuration per call only
 
 Per call: one configuration from Python, `armkit.fk` and `armkit.jacobian` against pinocchio
 (``forwardKinematics`` + ``updateFramePlacement`` of the tool frame, and
@@ -75,6 +76,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="N = 1e5 only, no memory runs")
     parser.add_argument("--rounds", type=int, default=7)
+    parser.add_argument("--single", action="store_true",
+                        help="one configuration per call only (no batch, threads or memory)")
     args = parser.parse_args()
     sizes = [100_000] if args.quick else [100_000, 1_000_000]
     rounds = args.rounds
@@ -117,6 +120,8 @@ def main() -> None:
         row("", "one fk", one["fk"], "rtb", one["rtb"])
         row("", "one fk", one["fk"], "numpy", one["numpy"])
         row("", "one jacobian", one["jac"], "pinocchio", one["pin jac"])
+        if args.single:
+            continue
         for n in sizes:
             Q = rng.uniform(robot.lower, robot.upper, (n, robot.n))
             batch = interleaved({"fk": lambda: armkit.fk(robot, Q), "rtb": lambda: ets.eval(Q),
@@ -140,7 +145,7 @@ def main() -> None:
         row("", f"threads N={len(Q):.0e}", per["2"], "1 thread", per["1"], "ns")
         row("", f"auto N={len(Q):.0e}", per["auto"], "1 thread", per["1"], "ns")
     print(load())
-    if not args.quick:
+    if not (args.quick or args.single):
         for n, call in ((10_000_000, "fk"), (20_000_000, "manipulability")):
             seconds, out, extra = memory_at(n, call)
             print(f"\n{call} of {n:.0e} configurations (ur5): {seconds:.2f} s, output "

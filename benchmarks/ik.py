@@ -3,6 +3,7 @@ Levenberg-Marquardt (``ets.ik_LM``) and ikpy, on the same targets in the same ru
 
     python benchmarks/ik.py            # 1000 targets per robot, 3 rounds
     python benchmarks/ik.py --quick    # 200 targets, 2 rounds
+    python benchmarks/ik.py --single   # one numeric target per call only
 
 Targets: the FK of joint vectors drawn uniformly inside the limits (seed 0). Success is judged
 by armkit's FK for every solver alike: position error < 1e-9 m, rotation error < 1e-9 rad
@@ -18,7 +19,10 @@ over rounds (armkit and rtb interleaved round by round):
 - every closed-form solution (``--solutions`` runs only this part): 1000 UR5 and Puma 560
   targets in one `IKSolver.solutions` call, against one target per call (a held solver, and
   `armkit.ik_solutions`) and, on the Puma, roboticstoolbox's ``ikine_a`` for its 8
-  configurations; interleaved rounds, median [min-max].
+  configurations; interleaved rounds, median [min-max];
+- one numeric target per call (``--single`` runs only this part): a held solver from nothing
+  and from a start 0.05 rad off, and `armkit.ik`, against rtb's ``ik_LM``, interleaved
+  rounds, median [min-max] of the mean per call.
 
 The load average is printed before and after: the machine may be shared.
 """
@@ -157,17 +161,54 @@ def solutions(rounds: int) -> None:
                   f"ik_solutions: {ratio(spread['rtb'], spread['ik_solutions'])})")
 
 
+def single(rounds: int) -> None:
+    """One numeric target per call (Levenberg-Marquardt, 6-DOF arms, reachable targets): a
+    held `IKSolver` from no q0 (its seed bank built before timing) and from a q0 0.05 rad off
+    the target's joint values, `armkit.ik` (a solver derived per call, no bank), and rtb's
+    ``ik_LM`` on a cached ``ets``; interleaved round by round, 100 targets per round."""
+    print(f"\nOne numeric target per call, mean us per call over 100 targets; median [min-max] "
+          f"over {rounds} interleaved rounds, {load()}")
+    print("| robot | held solver, no q0 | held solver, q0 0.05 rad off | `armkit.ik` | rtb "
+          "`ik_LM` | rtb / held solver |")
+    print("|---|---|---|---|---|---|")
+    for name in ("tool_changer_6dof", "ur5", "inspection_6dof"):
+        robot = armkit.robot(name)
+        Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (100, robot.n))
+        T = armkit.fk(robot, Q)
+        near = np.clip(Q + 0.05, robot.lower, robot.upper)
+        ets = rtb_ets(robot)
+        solver = IKSolver(robot)
+        solver.solve(T[0], method="lm")
+        solver.solve(T[0], near[0], method="lm")
+        ik(robot, T[0], method="lm")
+        times = interleaved({
+            "held": lambda: [solver.solve(T[i], method="lm") for i in range(100)],
+            "near": lambda: [solver.solve(T[i], near[i], method="lm") for i in range(100)],
+            "ik": lambda: [ik(robot, T[i], method="lm") for i in range(100)],
+            "rtb": lambda: [ets.ik_LM(T[i], tol=1e-19, joint_limits=True) for i in range(100)]},
+            rounds)
+        per = {k: Spread(tuple(t / 100 for t in v.times)) for k, v in times.items()}
+        print(f"| {name} | {per['held'].text()} | {per['near'].text()} | {per['ik'].text()} | "
+              f"{per['rtb'].text()} | {ratio(per['rtb'], per['held'])} |", flush=True)
+    print(load())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="200 targets, 2 rounds")
     parser.add_argument("--solutions", action="store_true",
                         help="only every closed-form solution (the last section)")
+    parser.add_argument("--single", action="store_true",
+                        help="only one numeric target per call")
     parser.add_argument("--rounds", type=int, default=None, help="rounds (default 3, quick 2)")
     args = parser.parse_args()
     n_targets, n_single, n_ikpy, rounds = (200, 50, 10, 2) if args.quick else (1000, 200, 30, 3)
     rounds = args.rounds or rounds
     if args.solutions:
         solutions(rounds)
+        return
+    if args.single:
+        single(rounds)
         return
     print(f"load average before: {os.getloadavg()}")
     print("| robot | solver | success | batch us/target min/med/max | 1 call us | ik() us | "

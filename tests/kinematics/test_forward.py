@@ -28,8 +28,8 @@ def test_serial_and_parallel_kernels_agree():
     Q = random_q(robot, 2 * _kernels.GRAIN + 5)
     k = robot.chain.kernel
     a, b = np.empty((len(Q), 4, 4)), np.empty((len(Q), 4, 4))
-    _kernels.poses(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, a)
-    _kernels.poses_parallel(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, b)
+    _kernels.poses(Q, k.floats, k.ints, a)
+    _kernels.poses_parallel(Q, k.floats, k.ints, b)
     np.testing.assert_array_equal(a, b)
 
 
@@ -82,3 +82,63 @@ def test_bad_q_is_refused_with_its_reason(q, words):
     with pytest.raises(InputError) as err:
         armkit.fk(armkit.robot("ur5"), q)
     assert words in str(err.value)
+
+
+MIMIC_URDF = """<robot name="parallel">
+  <link name="base"/><link name="upper"/><link name="fore"/><link name="hand"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" velocity="1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/>
+    <origin xyz="0.4 0 0.1" rpy="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-2.5" upper="2.5" velocity="1"/></joint>
+  <joint name="wrist" type="revolute"><parent link="fore"/><child link="hand"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 1 0"/><limit lower="-2.5" upper="2.5" velocity="1"/>
+    <mimic joint="elbow" multiplier="-1" offset="0.2"/></joint>
+</robot>"""
+
+
+def packed_robots(tmp_path) -> list[armkit.Robot]:
+    path = tmp_path / "parallel.urdf"
+    path.write_text(MIMIC_URDF)
+    names = ("ur5", "puma560", "stanford", "panda", "tool_changer_6dof", "water_supply")
+    return [armkit.robot(name) for name in names] + [armkit.load_robot(path)]
+
+
+def test_the_packed_chain_holds_the_kernel_arrays(tmp_path):
+    for robot in packed_robots(tmp_path):
+        k, nj = robot.chain.kernel, robot.chain.n_joints
+        np.testing.assert_array_equal(k.ints, np.r_[k.kinds, k.source])
+        np.testing.assert_array_equal(k.floats[:nj], k.offsets)
+        np.testing.assert_array_equal(k.floats[nj:2 * nj], k.scale)
+        np.testing.assert_array_equal(k.floats[2 * nj:2 * nj + 12].reshape(3, 4), k.pre[:3])
+        np.testing.assert_array_equal(k.floats[2 * nj + 12:].reshape(nj, 3, 4), k.links[:, :3])
+        assert not (k.floats.flags.writeable or k.ints.flags.writeable)
+
+
+def test_one_configuration_equals_its_row_of_the_batch(tmp_path):
+    # One configuration goes straight to the `_one` kernels with the packed chain; a batch
+    # goes through the batch loops: the same values, bit for bit, mimic joints included.
+    for robot in packed_robots(tmp_path):
+        Q = random_q(robot, 50, seed=3)
+        T, J = armkit.fk(robot, Q), armkit.jacobian(robot, Q)
+        for q, Tk, Jk in zip(Q, T, J):
+            np.testing.assert_array_equal(armkit.fk(robot, q), Tk)
+            np.testing.assert_array_equal(armkit.jacobian(robot, q), Jk)
+        # And with the chain's own definition, walked joint by joint in NumPy.
+        for q, Tk in zip(Q[:5], T[:5]):
+            np.testing.assert_allclose(chain_pose(robot.chain, q), Tk, atol=1e-12)
+
+
+def chain_pose(chain, q) -> np.ndarray:
+    """T_base @ prod(T_before @ M(value) @ T_after) @ T_tool, M about or along the joint's
+    axis by ``scale * q[source] + offsets`` (mimic joints by their leader's value)."""
+    k, T = chain.kernel, chain.T_base.copy()
+    for j, source, scale, offset in zip(chain.joints, k.source, k.scale, k.offsets):
+        value, M, (x, y, z) = scale * q[source] + offset, np.eye(4), j.axis
+        if j.kind == "revolute":
+            K = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]])
+            M[:3, :3] += np.sin(value) * K + (1 - np.cos(value)) * K @ K
+        else:
+            M[:3, 3] = value * j.axis
+        T = T @ j.T_before @ M @ j.T_after
+    return T @ chain.T_tool

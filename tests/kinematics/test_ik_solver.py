@@ -234,3 +234,76 @@ def test_bad_solver_arguments():
         IKSolver(armkit.robot("ur5"), threads=0)
     with pytest.raises(InputError, match="samples: expected a whole number >= 0"):
         IKSolver(armkit.robot("ur5"), samples=-5)
+
+
+# --- one target: the single-call path gives what the batch gives ----------------------------
+
+@pytest.mark.parametrize("name", ["tool_changer_6dof", "panda", "ur5"])
+def test_one_numeric_target_equals_its_row_of_the_batch(name):
+    """One target takes the single-call path (the pose read in plain Python, q0 checked once,
+    the mask's arrays looked up); a batch takes the batch path: the same results, from q0 or
+    without, for any mask and however q0 is given."""
+    solver = SOLVERS[name]
+    robot = solver.robot
+    Q = random_q(robot, 6, seed=40)
+    T = armkit.fk(robot, Q)
+    near = Q + 0.03
+    for mask in (None, "position", "position+yaw"):
+        batch = solver.solve(T, method="lm", mask=mask)
+        from_q0 = solver.solve(T, near, method="lm", mask=mask)
+        for k in range(len(T)):
+            one = solver.solve(T[k], method="lm", mask=mask)
+            assert (one.success, one.reason, one.iterations, one.mask) == (
+                batch.success[k], batch.reason[k], batch.iterations[k], batch.mask)
+            np.testing.assert_array_equal(one.q, batch.q[k])
+            frozen = near[k].copy()
+            frozen.setflags(write=False)
+            for q0 in (near[k], near[k].tolist(), frozen):
+                one = solver.solve(T[k].tolist(), q0, method="lm", mask=mask)
+                np.testing.assert_array_equal(one.q, from_q0.q[k])
+                assert one.position_error == from_q0.position_error[k]
+                assert one.iterations == from_q0.iterations[k]
+    far = T[0].copy()
+    far[:3, 3] = robot.chain.points[0] + 3 * solver.reach * (far[:3, 3] - robot.chain.points[0]) \
+        / np.linalg.norm(far[:3, 3] - robot.chain.points[0])
+    assert solver.solve(far, Q[0], method="lm").reason == OUT_OF_REACH
+    with pytest.raises(InputError, match="q0: expected finite joint values"):
+        solver.solve(T[0], np.full(robot.n, np.nan), method="lm")
+
+
+def test_seed_starts_of_one_target_equal_its_row_of_a_batch():
+    solver = SOLVERS["panda"]
+    T = armkit.fk(solver.robot, random_q(solver.robot, 20, seed=41))
+    for mask in ("pose", "position", "position+axis", "position+yaw"):
+        many = solver.bank.starts(T, as_mask(mask), 8)
+        for k in range(len(T)):
+            np.testing.assert_array_equal(solver.bank.starts(T[k:k + 1], as_mask(mask), 8)[0],
+                                          many[k])
+
+
+def test_every_mask_has_its_forms_and_name():
+    from armkit.kinematics.ik.task import MASK_FORMS, NAMED_MASKS, mask_forms, mask_name
+    assert len(MASK_FORMS) == 63
+    for flags, forms in MASK_FORMS.items():
+        mask = np.array(flags, dtype=bool)
+        assert mask_forms(mask) is forms and mask_name(mask) == forms.name
+        np.testing.assert_array_equal(forms.flags, mask)
+        np.testing.assert_array_equal(forms.ints, flags)
+        np.testing.assert_array_equal(forms.rows, np.flatnonzero(flags))
+        assert not (forms.flags.flags.writeable or forms.rows.flags.writeable)
+    for name, flags in NAMED_MASKS.items():
+        assert mask_name(as_mask(name)) == name
+    assert mask_name(np.array([1, 1, 0, 0, 0, 1])) == "110001"
+
+
+def test_the_chain_holds_its_reach_and_kernel_limits():
+    for name in ARMS + ["water_supply", "modular_4dof"]:
+        chain = armkit.robot(name).chain
+        assert chain.reach == reach_bound(armkit.robot(name)) and chain.reach is chain.reach
+        L = chain.kernel_limits
+        assert L.shape == (5, chain.n) and not L.flags.writeable
+        np.testing.assert_array_equal(L[1], chain.upper)
+        np.testing.assert_array_equal(L[2], chain.wraps)
+        np.testing.assert_array_equal(L[3:], chain.sampling_limits)
+        np.testing.assert_array_equal(L[0], np.where(chain.wraps & ~np.isfinite(chain.lower),
+                                                     -np.pi, chain.lower))

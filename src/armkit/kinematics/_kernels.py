@@ -1,7 +1,8 @@
 """numba kernels for the chain's hot paths, one sample per call of a `_one` function.
 
 A chain reaches the kernels as `KernelChain`: joint i turns about (or slides along) z of the
-frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion. `pose_one` and
+frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion, packed in one
+float and one int array (`KernelChain.floats`, `KernelChain.ints`; F and I in the kernels). `pose_one` and
 `frames_one` carry a pose as 12 scalars (rotation rows and position) so that the whole product
 stays in registers; `pose_jacobian_one` keeps it in its output's rows (less code to compile
 for the first IK call, as fast). The batch loops come twice, serial and parallel, and `run`
@@ -37,10 +38,11 @@ GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: bel
 
 
 @_inline
-def _start(pre):
-    return (pre[0, 0], pre[0, 1], pre[0, 2], pre[0, 3],
-            pre[1, 0], pre[1, 1], pre[1, 2], pre[1, 3],
-            pre[2, 0], pre[2, 1], pre[2, 2], pre[2, 3])
+def _start(F, at):
+    """The top three rows of the transform at F[at:at + 12] as the 12-scalar pose."""
+    return (F[at], F[at + 1], F[at + 2], F[at + 3],
+            F[at + 4], F[at + 5], F[at + 6], F[at + 7],
+            F[at + 8], F[at + 9], F[at + 10], F[at + 11])
 
 
 @_inline
@@ -58,21 +60,21 @@ def _move(T, kind, value):
 
 
 @_inline
-def _then(T, C):
-    """T @ C for a constant rigid transform C (4, 4)."""
+def _then(T, F, at):
+    """T @ C for the constant rigid transform C whose top three rows are F[at:at + 12]."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
-    return (r00 * C[0, 0] + r01 * C[1, 0] + r02 * C[2, 0],
-            r00 * C[0, 1] + r01 * C[1, 1] + r02 * C[2, 1],
-            r00 * C[0, 2] + r01 * C[1, 2] + r02 * C[2, 2],
-            r00 * C[0, 3] + r01 * C[1, 3] + r02 * C[2, 3] + p0,
-            r10 * C[0, 0] + r11 * C[1, 0] + r12 * C[2, 0],
-            r10 * C[0, 1] + r11 * C[1, 1] + r12 * C[2, 1],
-            r10 * C[0, 2] + r11 * C[1, 2] + r12 * C[2, 2],
-            r10 * C[0, 3] + r11 * C[1, 3] + r12 * C[2, 3] + p1,
-            r20 * C[0, 0] + r21 * C[1, 0] + r22 * C[2, 0],
-            r20 * C[0, 1] + r21 * C[1, 1] + r22 * C[2, 1],
-            r20 * C[0, 2] + r21 * C[1, 2] + r22 * C[2, 2],
-            r20 * C[0, 3] + r21 * C[1, 3] + r22 * C[2, 3] + p2)
+    return (r00 * F[at] + r01 * F[at + 4] + r02 * F[at + 8],
+            r00 * F[at + 1] + r01 * F[at + 5] + r02 * F[at + 9],
+            r00 * F[at + 2] + r01 * F[at + 6] + r02 * F[at + 10],
+            r00 * F[at + 3] + r01 * F[at + 7] + r02 * F[at + 11] + p0,
+            r10 * F[at] + r11 * F[at + 4] + r12 * F[at + 8],
+            r10 * F[at + 1] + r11 * F[at + 5] + r12 * F[at + 9],
+            r10 * F[at + 2] + r11 * F[at + 6] + r12 * F[at + 10],
+            r10 * F[at + 3] + r11 * F[at + 7] + r12 * F[at + 11] + p1,
+            r20 * F[at] + r21 * F[at + 4] + r22 * F[at + 8],
+            r20 * F[at + 1] + r21 * F[at + 5] + r22 * F[at + 9],
+            r20 * F[at + 2] + r21 * F[at + 6] + r22 * F[at + 10],
+            r20 * F[at + 3] + r21 * F[at + 7] + r22 * F[at + 11] + p2)
 
 
 @_inline
@@ -87,42 +89,45 @@ def _store(T, out):
 
 
 @_jit
-def pose_one(q, kinds, offsets, pre, links, source, scale, out):
-    """Tool pose of one configuration q (n,) into out (4, 4); False if q is not finite."""
-    T = _start(pre)
+def pose_one(q, F, I, out):
+    """Tool pose of one configuration q (n,) into out (4, 4); False if q is not finite.
+    F, I: the chain packed (`KernelChain.floats`, `KernelChain.ints`)."""
+    nj = I.shape[0] // 2
+    T = _start(F, 2 * nj)
     finite = True
-    for i in range(kinds.shape[0]):
-        v = q[source[i]]
+    for i in range(nj):
+        v = q[I[nj + i]]
         finite &= math.isfinite(v)
-        T = _then(_move(T, kinds[i], scale[i] * v + offsets[i]), links[i])
+        T = _then(_move(T, I[i], F[nj + i] * v + F[i]), F, 2 * nj + 12 + 12 * i)
     _store(T, out)
     return finite
 
 
 @_jit
-def frames_one(q, kinds, offsets, pre, links, source, scale, joint_frames, out):
+def frames_one(q, F, I, joint_frames, out):
     """Joint frames after each motion (n_joints, 4, 4) (z is the joint axis) and the tool
     pose."""
-    T = _start(pre)
-    for i in range(kinds.shape[0]):
-        T = _move(T, kinds[i], scale[i] * q[source[i]] + offsets[i])
+    nj = I.shape[0] // 2
+    T = _start(F, 2 * nj)
+    for i in range(nj):
+        T = _move(T, I[i], F[nj + i] * q[I[nj + i]] + F[i])
         _store(T, joint_frames[i])
-        T = _then(T, links[i])
+        T = _then(T, F, 2 * nj + 12 + 12 * i)
     _store(T, out)
 
 
 @_jit
-def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
+def pose_jacobian_one(q, F, I, out, J):
     """Tool pose into out (4, 4) and the geometric Jacobian (6, n), base frame, into J.
 
     Column of moving joint i: revolute ``(z_i x (p - o_i), z_i)``, prismatic ``(z_i, 0)``;
     z_i the joint axis, o_i a point on it, p the tool origin; a mimic joint's column is added,
     times its multiplier, to its leader's. Returns False if q is not finite.
     """
-    n = kinds.shape[0]
+    n = I.shape[0] // 2
     coupled = n != J.shape[1]
     for i in range(n):
-        coupled |= source[i] != i or scale[i] != 1.0
+        coupled |= I[n + i] != i or F[n + i] != 1.0
     # Joint origins and axes in J's columns (or in scratch, when mimic joints share columns).
     axes = np.empty((6, n)) if coupled else J
     # The running pose is out's top three rows, updated row by row with `_move`'s and `_then`'s
@@ -130,13 +135,13 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
     # the 12-scalar form inlines, and this kernel is compiled by the first jacobian and IK call.
     for r in range(3):
         for c in range(4):
-            out[r, c] = pre[r, c]
+            out[r, c] = F[2 * n + 4 * r + c]
     finite = True
     for i in range(n):
-        v = q[source[i]]
+        v = q[I[n + i]]
         finite &= math.isfinite(v)
-        value = scale[i] * v + offsets[i]
-        if kinds[i] == 0:
+        value = F[n + i] * v + F[i]
+        if I[i] == 0:
             c, s = math.cos(value), math.sin(value)
             for r in range(3):
                 a, b = out[r, 0], out[r, 1]
@@ -145,19 +150,19 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
         else:
             for r in range(3):
                 out[r, 3] = out[r, 3] + value * out[r, 2]
-        C = links[i]
+        lk = 2 * n + 12 + 12 * i                                        # link i's rows in F
         for r in range(3):
             axes[r, i] = out[r, 3]                                      # o_i, for now
             axes[3 + r, i] = out[r, 2]                                  # z_i
             a, b, d, p = out[r, 0], out[r, 1], out[r, 2], out[r, 3]
-            out[r, 0] = a * C[0, 0] + b * C[1, 0] + d * C[2, 0]
-            out[r, 1] = a * C[0, 1] + b * C[1, 1] + d * C[2, 1]
-            out[r, 2] = a * C[0, 2] + b * C[1, 2] + d * C[2, 2]
-            out[r, 3] = a * C[0, 3] + b * C[1, 3] + d * C[2, 3] + p
+            out[r, 0] = a * F[lk] + b * F[lk + 4] + d * F[lk + 8]
+            out[r, 1] = a * F[lk + 1] + b * F[lk + 5] + d * F[lk + 9]
+            out[r, 2] = a * F[lk + 2] + b * F[lk + 6] + d * F[lk + 10]
+            out[r, 3] = a * F[lk + 3] + b * F[lk + 7] + d * F[lk + 11] + p
     px, py, pz = out[0, 3], out[1, 3], out[2, 3]
     for i in range(n):
         zx, zy, zz = axes[3, i], axes[4, i], axes[5, i]
-        if kinds[i] == 0:
+        if I[i] == 0:
             dx, dy, dz = px - axes[0, i], py - axes[1, i], pz - axes[2, i]
             axes[0, i] = zy * dz - zz * dy
             axes[1, i] = zz * dx - zx * dz
@@ -169,7 +174,7 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
         J[:, :] = 0.0
         for i in range(n):
             for r in range(6):
-                J[r, source[i]] += scale[i] * axes[r, i]
+                J[r, I[n + i]] += F[n + i] * axes[r, i]
     out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
     return finite
 
@@ -177,39 +182,39 @@ def pose_jacobian_one(q, kinds, offsets, pre, links, source, scale, out, J):
 # --- batch loops: Q (N, n) -> outputs with leading N ------------------------------------------
 
 @_jit
-def poses(Q, kinds, offsets, pre, links, source, scale, out):
+def poses(Q, F, I, out):
     for k in range(Q.shape[0]):
-        pose_one(Q[k], kinds, offsets, pre, links, source, scale, out[k])
+        pose_one(Q[k], F, I, out[k])
 
 
 @_pjit
-def poses_parallel(Q, kinds, offsets, pre, links, source, scale, out):
+def poses_parallel(Q, F, I, out):
     for k in prange(Q.shape[0]):
-        pose_one(Q[k], kinds, offsets, pre, links, source, scale, out[k])
+        pose_one(Q[k], F, I, out[k])
 
 
 @_jit
-def frames(Q, kinds, offsets, pre, links, source, scale, joint_frames, out):
+def frames(Q, F, I, joint_frames, out):
     for k in range(Q.shape[0]):
-        frames_one(Q[k], kinds, offsets, pre, links, source, scale, joint_frames[k], out[k])
+        frames_one(Q[k], F, I, joint_frames[k], out[k])
 
 
 @_pjit
-def frames_parallel(Q, kinds, offsets, pre, links, source, scale, joint_frames, out):
+def frames_parallel(Q, F, I, joint_frames, out):
     for k in prange(Q.shape[0]):
-        frames_one(Q[k], kinds, offsets, pre, links, source, scale, joint_frames[k], out[k])
+        frames_one(Q[k], F, I, joint_frames[k], out[k])
 
 
 @_jit
-def pose_jacobians(Q, kinds, offsets, pre, links, source, scale, out, J):
+def pose_jacobians(Q, F, I, out, J):
     for k in range(Q.shape[0]):
-        pose_jacobian_one(Q[k], kinds, offsets, pre, links, source, scale, out[k], J[k])
+        pose_jacobian_one(Q[k], F, I, out[k], J[k])
 
 
 @_pjit
-def pose_jacobians_parallel(Q, kinds, offsets, pre, links, source, scale, out, J):
+def pose_jacobians_parallel(Q, F, I, out, J):
     for k in prange(Q.shape[0]):
-        pose_jacobian_one(Q[k], kinds, offsets, pre, links, source, scale, out[k], J[k])
+        pose_jacobian_one(Q[k], F, I, out[k], J[k])
 
 
 def run(serial, parallel, Q: np.ndarray, *args) -> None:

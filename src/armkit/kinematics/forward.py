@@ -8,6 +8,8 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.kinematics import _kernels
 from armkit.model.robot import Robot, joint_array
 
+FLOAT = np.dtype(np.float64)   # the one dtype the one-configuration path hands to the kernels
+
 
 def fk(robot: Robot, q: ArrayLike) -> NDArray:
     """Tool pose in the robot's base (world) frame.
@@ -34,18 +36,19 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
     array([-0.81725 , -0.19145 , -0.005491])
     """
     k = robot.chain.kernel
-    if (type(q) is np.ndarray and q.shape == robot.chain.lower.shape and q.dtype == np.float64
+    if (type(q) is np.ndarray and q.dtype is FLOAT and q.shape == robot.chain.lower.shape
             and q.flags.c_contiguous):
-        # One configuration from Python: straight to the kernel, which also checks finiteness
-        # (a non-finite q falls through to joint_array, which says what is wrong).
+        # One configuration from Python: straight to the kernel, the chain packed in two
+        # arrays (what numba's dispatcher costs grows with the arrays passed); the kernel also
+        # checks finiteness (a non-finite q falls through to joint_array, which says what is
+        # wrong).
         out = np.empty((4, 4))
-        if _kernels.pose_one.light(q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, out):
+        if _kernels.pose_one.light(q, k.floats, k.ints, out):
             return out
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     out = np.empty((flat.shape[0], 4, 4))
-    _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.kinds, k.offsets, k.pre,
-                 k.links, k.source, k.scale, out)
+    _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.floats, k.ints, out)
     return out.reshape(q.shape[:-1] + (4, 4))
 
 
@@ -65,8 +68,8 @@ def joint_frames(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     frames = np.empty((flat.shape[0], n, 4, 4))
     out = np.empty((flat.shape[0], 4, 4))
     k = robot.chain.kernel
-    _kernels.run(_kernels.frames, _kernels.frames_parallel, flat, k.kinds, k.offsets, k.pre,
-                 k.links, k.source, k.scale, frames, out)
+    _kernels.run(_kernels.frames, _kernels.frames_parallel, flat, k.floats, k.ints, frames,
+                 out)
     lead = q.shape[:-1]
     return frames.reshape(lead + (n, 4, 4)), out.reshape(lead + (4, 4))
 

@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics import _kernels
-from armkit.kinematics.forward import joint_frames
+from armkit.kinematics.forward import FLOAT, joint_frames
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import matrix_to_rpy
 
@@ -41,19 +41,19 @@ def streamed(compute, q: NDArray, tail: tuple[int, ...]) -> NDArray:
 def pose_and_jacobian(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     """Tool pose (..., 4, 4) and geometric Jacobian in the base frame (..., 6, n), one pass."""
     k = robot.chain.kernel
-    if (type(q) is np.ndarray and q.shape == robot.chain.lower.shape and q.dtype == np.float64
+    if (type(q) is np.ndarray and q.dtype is FLOAT and q.shape == robot.chain.lower.shape
             and q.flags.c_contiguous):
-        # One configuration from Python: straight to the kernel, which checks finiteness.
+        # One configuration from Python: straight to the kernel, the chain packed in two
+        # arrays (as `fk`); the kernel checks finiteness.
         T, J = np.empty((4, 4)), np.empty((6, q.shape[0]))
-        if _kernels.pose_jacobian_one.light(q, k.kinds, k.offsets, k.pre, k.links, k.source,
-                                            k.scale, T, J):
+        if _kernels.pose_jacobian_one.light(q, k.floats, k.ints, T, J):
             return T, J
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     T = np.empty((flat.shape[0], 4, 4))
     J = np.empty((flat.shape[0], 6, robot.n))
-    _kernels.run(_kernels.pose_jacobians, _kernels.pose_jacobians_parallel, flat, k.kinds,
-                 k.offsets, k.pre, k.links, k.source, k.scale, T, J)
+    _kernels.run(_kernels.pose_jacobians, _kernels.pose_jacobians_parallel, flat, k.floats,
+                 k.ints, T, J)
     lead = q.shape[:-1]
     return T.reshape(lead + (4, 4)), J.reshape(lead + (6, robot.n))
 

@@ -302,6 +302,30 @@ class Chain:
         upper = np.where(endless, lower + np.where(self.revolute, 2 * np.pi, 2.0), self.upper)
         return frozen_array(lower), frozen_array(upper)
 
+    @cached_property
+    def reach(self) -> float:
+        """An upper bound (m) on the distance from joint 1's axis point (``points[0]``) to the
+        tool point, over every joint value within the limits.
+
+        Consecutive axis points are fixed in the link between them, so the tool can be no
+        farther than the sum of those distances, plus the longest stroke of each prismatic
+        joint (mimic ones too, from its value at q = 0). A target farther than this is out of
+        reach, whatever the solver. Computed on first use and kept, as the chain is immutable.
+        """
+        k = self.kernel
+        points = np.vstack([self.points, self.T_home[:3, 3]])
+        strokes = np.abs(k.motion_ends(self.lower, self.upper) - k.offsets).max(axis=0)
+        return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1))
+                     + strokes[k.kinds == 1].sum())
+
+    @cached_property
+    def kernel_limits(self) -> NDArray:
+        """(5, n): the joint limits as the numeric IK kernels take them, read-only. Rows: lower
+        (-pi for a wrapping joint without a finite lower limit), upper, `wraps` (1.0 or 0.0),
+        then `sampling_limits` (lower, upper). Computed on first use and kept."""
+        lower = np.where(self.wraps & ~np.isfinite(self.lower), -np.pi, self.lower)
+        return frozen_array([lower, self.upper, self.wraps, *self.sampling_limits])
+
 
 def _variables(joints: tuple[Joint, ...], leaders: tuple[Joint, ...]) -> tuple[Joint, ...]:
     """The joints q holds values of: independent ones in chain order, a leader off the chain
@@ -385,6 +409,13 @@ class KernelChain:
     motion; links (n_joints, 4, 4): from joint i's motion to joint i+1's (the last ends at the
     tool); after (n_joints - 1, 4, 4): from joint i's motion to link frame i (the last link
     frame is the tool).
+
+    The kernels take the same chain packed in two read-only arrays, `floats` and `ints` (two
+    arrays cross numba's dispatcher in a fraction of the time of six, which is most of the
+    cost of one configuration's pose): ints (2 n_joints,) is kinds then source; floats
+    (2 n_joints + 12 + 12 n_joints,) is offsets, scale, the top three rows of pre (3, 4)
+    row by row, then those of each link (n_joints, 3, 4) (the last row of a rigid transform is
+    always 0 0 0 1).
     """
 
     kinds: NDArray
@@ -394,6 +425,17 @@ class KernelChain:
     after: NDArray
     source: NDArray
     scale: NDArray
+    floats: NDArray = field(init=False, repr=False)
+    ints: NDArray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        floats = np.concatenate([self.offsets, self.scale, np.reshape(self.pre[:3], -1),
+                                 np.reshape(self.links[:, :3], -1)]).astype(float)
+        ints = np.concatenate([self.kinds, self.source]).astype(np.int64)
+        floats.setflags(write=False)
+        ints.setflags(write=False)
+        object.__setattr__(self, "floats", floats)
+        object.__setattr__(self, "ints", ints)
 
     def motion_ends(self, lower: ArrayLike, upper: ArrayLike) -> NDArray:
         """(2, n_joints): each moving joint's motion ``scale * q[source] + offset`` at the

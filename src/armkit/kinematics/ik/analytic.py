@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from armkit.jit import kernel
 from armkit.kinematics import _kernels
-from armkit.kinematics.ik.task import task_errors_one
+from armkit.kinematics.ik.task import mask_forms, task_errors_one
 from armkit.model.chain import Chain
 
 PARALLEL = 1e-9          # |w_i x w_j| below this: parallel axes
@@ -387,9 +387,9 @@ def _fold(v, lower, upper, ref):
 def _check(q, T, q_ref, limits, chain, mask, tol, errors, flags, pose):
     """Branches q (K, n) of target T folded in place; errors (K, 2) position and rotation by
     FK; flags (K, 4): real, reached (within tol under the mask), inside the limits, and valid
-    (reached and not equal to an earlier valid branch). chain: the `KernelChain`'s arrays
-    (kinds, offsets, pre, links, source, scale)."""
-    kinds, offsets, pre, links, source, scale = chain
+    (reached and not equal to an earlier valid branch). chain: the `KernelChain` packed
+    (floats, ints)."""
+    F, I = chain
     K, n = q.shape
     for b in range(K):
         real = True
@@ -402,7 +402,7 @@ def _check(q, T, q_ref, limits, chain, mask, tol, errors, flags, pose):
                 v = _fold(v, limits[0, j], limits[1, j], q_ref[j])
             q[b, j] = v
             inside &= limits[0, j] - 1e-12 <= v <= limits[1, j] + 1e-12
-        _kernels.pose_one(q[b], kinds, offsets, pre, links, source, scale, pose)
+        _kernels.pose_one(q[b], F, I, pose)
         pe, re = task_errors_one(pose, T, mask)
         errors[b, 0], errors[b, 1] = pe, re
         reached = real and pe < tol[0] and re < tol[1]
@@ -497,7 +497,9 @@ def _cross3(a, b) -> tuple[float, float, float]:
 
 
 def _parallel(a, b) -> bool:
-    return math.hypot(*_cross3(a, b)) < PARALLEL
+    """|a x b| < PARALLEL (the cross product written out: called a dozen times per robot)."""
+    return math.hypot(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                      a[0] * b[1] - a[1] * b[0]) < PARALLEL
 
 
 def _line_distance(w1, r1, w2, r2) -> float:
@@ -516,15 +518,16 @@ def _meeting_point(w1, r1, w2, r2) -> tuple[float, float, float]:
 
 def _normal_to(a) -> tuple[float, float, float]:
     """A unit vector normal to a (unit, 3)."""
-    k = min(range(3), key=lambda i: abs(a[i]))
-    v = _axpy3(-a[k], a, tuple(float(i == k) for i in range(3)))
+    x, y, z = abs(a[0]), abs(a[1]), abs(a[2])
+    k = (0 if x <= z else 2) if x <= y else (1 if y <= z else 2)     # min's first smallest
+    v = _axpy3(-a[k], a, ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))[k])
     return _axpy3(1.0 / math.hypot(*v) - 1.0, v, v)
 
 
 def _home(chain: Chain) -> tuple[list, tuple]:
     """T_home's rotation as rows, and its position."""
-    M = chain.T_home.tolist()
-    return [tuple(row[:3]) for row in M[:3]], tuple(row[3] for row in M[:3])
+    (a, b, c, x), (d, e, f, y), (g, h, i, z), _ = chain.T_home.tolist()
+    return [(a, b, c), (d, e, f), (g, h, i)], (x, y, z)
 
 
 def _pointing_axis(chain: Chain, w, r) -> int:
@@ -548,8 +551,10 @@ def _rotation_flags(k: int, pointing: bool) -> tuple[int, ...]:
 
 def _family(chain: Chain, name: str, mask: tuple[int, ...], branches: int, rows: list,
             kernel) -> Family:
-    geometry = np.array(rows, dtype=float)
-    limits = np.array((chain.lower, chain.upper, chain.revolute), dtype=float)
+    # One flat list and one concatenation: NumPy builds a (G, 3) array from nested tuples
+    # several times slower.
+    geometry = np.array([x for row in rows for x in row], dtype=float).reshape(-1, 3)
+    limits = np.concatenate((chain.lower, chain.upper, chain.revolute)).reshape(3, -1)
     geometry.setflags(write=False)
     limits.setflags(write=False)
     return Family(name, mask, branches, geometry, kernel, limits)
@@ -558,8 +563,9 @@ def _family(chain: Chain, name: str, mask: tuple[int, ...], branches: int, rows:
 def _home_inverse(chain: Chain) -> list:
     """inv(T_home) as four rows: its rotation's columns (the home rotation's rows), then its
     position."""
-    R, t0 = _home(chain)
-    return [*R, tuple(-_dot3(column, t0) for column in zip(*R))]
+    R, (x, y, z) = _home(chain)
+    (a, b, c), (d, e, f), (g, h, i) = R
+    return [*R, (-(a * x + d * y + g * z), -(b * x + e * y + h * z), -(c * x + f * y + i * z))]
 
 
 def family_of(chain: Chain) -> Family | None:
@@ -650,7 +656,7 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     flags = np.empty((N, K, 4), dtype=np.bool_)
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
-    family.kernel.sized(N, family.geometry, targets, q_ref, family.limits,
-                  (k.kinds, k.offsets, k.pre, k.links, k.source, k.scale), mask.astype(np.int64),
-                  np.array([tol_position, tol_rotation]), q, errors, flags)
+    family.kernel.sized(N, family.geometry, targets, q_ref, family.limits, (k.floats, k.ints),
+                        mask_forms(mask).ints, np.array([tol_position, tol_rotation]), q, errors,
+                        flags)
     return q, errors, flags

@@ -25,10 +25,12 @@ configurations drawn uniformly inside the limits (a splitmix64 stream per target
 the best point found gets one last run of ten times ``max_iter`` (near a singularity
 convergence is slow, not absent).
 
-The kernels take their arguments in groups (plain tuples, see `KernelArgs`):
-``chain = (kinds, offsets, pre, links, source, scale)`` (`KernelChain`), ``limits = (lower, upper, turn, sample_lo,
-sample_hi)``, ``task = (mask, rows, tol_position, tol_rotation)`` and
-``budget = (max_iter, restarts, method, seed)``.
+The kernels take their arguments in groups (see `KernelArgs`): ``chain = (floats, ints)``
+(`KernelChain`'s packed arrays), ``limits`` (5, n) with rows lower, upper, turn, sample_lo,
+sample_hi, ``task = (mask, rows, tol_position, tol_rotation)`` and
+``budget = (max_iter, restarts, method, seed, follow, max_step, polish)``. Few arrays cross
+numba's dispatcher, whose cost grows with each one: for one target it is a good part of the
+call.
 """
 
 from __future__ import annotations
@@ -41,7 +43,7 @@ import numpy as np
 
 from armkit.jit import kernel
 from armkit.kinematics._kernels import pose_jacobian_one
-from armkit.kinematics.ik.task import task_errors_one, task_residual
+from armkit.kinematics.ik.task import mask_forms, task_errors_one, task_residual
 from armkit.threads import threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
@@ -198,7 +200,7 @@ def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacob
     the loop, the held-joint step is the second pass of one loop): the compiled code inlines
     every call, so each call site costs compile time.
     """
-    kinds, offsets, pre, links, source, scale = chain
+    F, I = chain
     lower, upper, turn = limits[0], limits[1], limits[2]
     mask, rows, tol_p, tol_r = task
     n = q.shape[0]
@@ -214,7 +216,7 @@ def _descend(q, Tt, chain, limits, task, method, iterations, stall, poses, jacob
     cost, size, first, evaluate = np.inf, np.inf, True, True
     for it in range(iterations + 1):
         if evaluate:                                    # the trial point q_try
-            pose_jacobian_one(q_try, kinds, offsets, pre, links, source, scale, T2, J2)
+            pose_jacobian_one(q_try, F, I, T2, J2)
             new_cost = task_residual(T2, J2, Tt, mask, rows, e2, A2, E, w)
             if first or method == NEWTON or new_cost < cost:
                 for j in range(n):
@@ -275,7 +277,8 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
     max_step (cause 2); returns (first target not followed, cause), (last, 0) when all were.
     One kernel does both so that the first call compiles the solver once.
     """
-    lower, upper, turn, sample_lo, sample_hi = limits
+    lower, upper, turn, sample_lo, sample_hi = (limits[0], limits[1], limits[2], limits[3],
+                                                limits[4])
     max_iter, restarts, method, seed, follow, max_step, polish = budget
     n, m = starts.shape[2], task[1].shape[0]
     k = m if m < n else n                               # scratch for _descend
@@ -344,15 +347,6 @@ def solve_targets(first, last, targets, starts, chain, limits, task, budget, q_o
 
 # --- the Python side --------------------------------------------------------------------------
 
-def _read_only(a) -> np.ndarray:
-    """a as a C-contiguous read-only array (a copy only if needed)."""
-    if isinstance(a, np.ndarray) and a.flags.c_contiguous and not a.flags.writeable:
-        return a
-    a = np.array(a)
-    a.setflags(write=False)
-    return a
-
-
 def _writable(a, dtype=float) -> np.ndarray:
     """a as a C-contiguous writable array (a copy only if needed): the kernels see one type
     whatever the caller passed, and compile once."""
@@ -363,30 +357,26 @@ def _writable(a, dtype=float) -> np.ndarray:
 class KernelArgs:
     """A robot's arrays as the numeric kernels take them, built once per solver.
 
-    chain: (kinds, offsets, pre, links, source, scale); limits: (lower, upper, turn, sample_lo, sample_hi),
-    where turn marks revolute joints whose range is a full turn or more (they wrap instead of
-    stopping) and the sample range is `Chain.sampling_limits`.
+    chain: `KernelChain`'s packed (floats, ints); limits (5, n): lower, upper, turn,
+    sample_lo, sample_hi, where turn is 1.0 for revolute joints whose range is a full turn or
+    more (they wrap instead of stopping) and the sample range is `Chain.sampling_limits`.
     """
 
     chain: tuple
-    limits: tuple
+    limits: np.ndarray
 
     @classmethod
     def of(cls, robot) -> "KernelArgs":
-        chain, k = robot.chain, robot.chain.kernel
-        lower, upper = chain.lower, chain.upper
-        turn = chain.wraps
-        lower_w = np.where(turn & ~np.isfinite(lower), -np.pi, lower)
-        sample_lo, sample_hi = chain.sampling_limits
-        return cls(tuple(_read_only(a) for a in (k.kinds, k.offsets, k.pre, k.links,
-                                                  k.source, k.scale)),
-                   tuple(_read_only(a) for a in (lower_w, upper, turn, sample_lo, sample_hi)))
+        """The robot's chain packed (`KernelChain.floats`, `KernelChain.ints`) and its
+        `Chain.kernel_limits`: arrays the model computes once."""
+        k = robot.chain.kernel
+        return cls((k.floats, k.ints), robot.chain.kernel_limits)
 
 
 def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tuple:
     """The task group of the kernels: (mask (6,) int, rows (m,) int, tol_p, tol_r)."""
-    return (mask.astype(np.int64), np.flatnonzero(mask).astype(np.int64), float(tol_position),
-            float(tol_rotation))
+    forms = mask_forms(mask)
+    return (forms.ints, forms.rows, float(tol_position), float(tol_rotation))
 
 
 def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task: tuple,

@@ -148,7 +148,7 @@ class SeedBank:
         # one thread, and thread start-up on a busy machine would cost ten times that.
         T = np.empty((samples, 4, 4))
         k = robot.chain.kernel
-        _kernels.poses.light(Q, k.kinds, k.offsets, k.pre, k.links, k.source, k.scale, T)
+        _kernels.poses.light(Q, k.floats, k.ints, T)
         P = np.ascontiguousarray(T[:, :3, 3])
         G = max(1, round(samples ** (1 / 3)))
         lo = P.min(axis=0)
@@ -164,7 +164,14 @@ class SeedBank:
         """Starts (N, count, n) for targets (N, 4, 4): the `count` samples nearest each target
         by the features the mask uses, nearest first."""
         best = np.empty((targets.shape[0], min(count, self.q.shape[0])), dtype=np.int64)
-        _nearest.sized(targets.shape[0], np.ascontiguousarray(features(targets, self.length)),
-                       self.features, feature_columns(mask), self.lo, self.inv, self.cells,
-                       self.order, self.start, best)
-        return self.q[best]
+        if targets.shape[0] == 1:
+            # One target: its features in plain Python (the same products as `features`),
+            # several times cheaper than NumPy's calls on a (1, 4, 4) array.
+            v, length = targets.ravel().tolist(), self.length
+            wanted = np.array([[v[3], v[7], v[11]] + [v[4 * r + c] * length for c in range(3)
+                                                      for r in range(3)]])
+        else:
+            wanted = np.ascontiguousarray(features(targets, self.length))
+        _nearest.sized(targets.shape[0], wanted, self.features, feature_columns(mask), self.lo,
+                       self.inv, self.cells, self.order, self.start, best)
+        return self.q.take(best, axis=0)        # as self.q[best], without fancy indexing's cost

@@ -17,12 +17,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics import _kernels
+from armkit.kinematics.forward import FLOAT
 from armkit.kinematics.ik import analytic, numeric
 from armkit.kinematics.ik.choose import CRITERIA, scores
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
                                           not_converged)
 from armkit.kinematics.ik.seeds import SeedBank
-from armkit.kinematics.ik.task import as_mask, mask_name
+from armkit.kinematics.ik.task import MASK_FORMS, NAMED_MASKS, as_mask, mask_name
 from armkit.kinematics.jacobian import pose_and_jacobian
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
@@ -146,10 +147,11 @@ class IKTrack:
         return {name: _plain(getattr(self, name)) for name in self.__dataclass_fields__}
 
 
-def _pose_fast(target) -> NDArray | None:
+def _pose_fast(target) -> tuple[NDArray, list] | None:
     """One pose (4, 4) checked in plain Python (for 16 numbers several times cheaper than the
-    NumPy checks of `as_transform`, with the same tolerance); None if it is not one valid pose,
-    and the caller lets `as_transform` say why."""
+    NumPy checks of `as_transform`, with the same tolerance): the pose as a new float array
+    and its 16 values row by row; None if it is not one valid pose, and the caller lets
+    `as_transform` say why."""
     try:
         T = np.array(target, dtype=float)
     except (TypeError, ValueError):
@@ -159,14 +161,13 @@ def _pose_fast(target) -> NDArray | None:
     v = T.ravel().tolist()
     if not all(map(math.isfinite, v)):
         return None
-    r0, r1, r2 = v[0:3], v[4:7], v[8:11]
-    dot = lambda a, b: a[0] * b[0] + a[1] * b[1] + a[2] * b[2]      # noqa: E731
-    off = max(abs(dot(r0, r0) - 1.0), abs(dot(r1, r1) - 1.0), abs(dot(r2, r2) - 1.0),
-              abs(dot(r0, r1)), abs(dot(r0, r2)), abs(dot(r1, r2)))
-    det = (r0[0] * (r1[1] * r2[2] - r1[2] * r2[1]) - r0[1] * (r1[0] * r2[2] - r1[2] * r2[0])
-           + r0[2] * (r1[0] * r2[1] - r1[1] * r2[0]))
+    a0, a1, a2, _, b0, b1, b2, _, c0, c1, c2 = v[:11]
+    off = max(abs(a0 * a0 + a1 * a1 + a2 * a2 - 1.0), abs(b0 * b0 + b1 * b1 + b2 * b2 - 1.0),
+              abs(c0 * c0 + c1 * c1 + c2 * c2 - 1.0), abs(a0 * b0 + a1 * b1 + a2 * b2),
+              abs(a0 * c0 + a1 * c1 + a2 * c2), abs(b0 * c0 + b1 * c1 + b2 * c2))
+    det = a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)
     last = max(abs(v[12]), abs(v[13]), abs(v[14]), abs(v[15] - 1.0))
-    return T if off <= 1e-6 and det > 0 and last <= 1e-6 else None
+    return (T, v) if off <= 1e-6 and det > 0 and last <= 1e-6 else None
 
 
 def reach_bound(robot: Robot) -> float:
@@ -175,14 +176,10 @@ def reach_bound(robot: Robot) -> float:
 
     Consecutive axis points are fixed in the link between them, so the tool can be no farther
     than the sum of those distances, plus the longest stroke of each prismatic joint. A target
-    farther than this is out of reach, whatever the solver.
+    farther than this is out of reach, whatever the solver. The chain computes it once
+    (`Chain.reach`).
     """
-    chain, k = robot.chain, robot.chain.kernel
-    points = np.vstack([chain.points, chain.T_home[:3, 3]])
-    # Each prismatic moving joint (mimic ones too) strokes from its value at q = 0.
-    strokes = np.abs(k.motion_ends(chain.lower, chain.upper) - k.offsets).max(axis=0)
-    return float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1))
-                 + strokes[k.kinds == 1].sum())
+    return robot.chain.reach
 
 
 _UNKNOWN = object()
@@ -271,18 +268,15 @@ class IKSolver:
                                  ("threads", 1 if threads is None else threads, 1)):
             if not (isinstance(value, (int, np.integer)) and low <= value < 2**63):
                 raise InputError(f"{name}: expected a whole number >= {low}, found {value!r}")
-        object.__setattr__(self, "robot", robot)
-        object.__setattr__(self, "family", analytic.family_of(robot.chain))
-        object.__setattr__(self, "default_mask", default_mask(robot, self.family))
-        self.default_mask.setflags(write=False)
-        object.__setattr__(self, "default_name", mask_name(self.default_mask))
-        object.__setattr__(self, "_reach", None)
-        object.__setattr__(self, "_kernel_args", None)
-        object.__setattr__(self, "_samples", int(samples))
-        object.__setattr__(self, "_seed", int(seed))
-        object.__setattr__(self, "_threads", threads)
-        object.__setattr__(self, "_bank", None)
-        object.__setattr__(self, "_middle", None)
+        family = analytic.family_of(robot.chain)
+        # The default task's arrays are the read-only ones fixed at import (`MASK_FORMS`).
+        forms = MASK_FORMS[family.mask if family is not None
+                           else NAMED_MASKS["pose" if robot.n >= 6 else "position"]]
+        # One update of the instance's dict (`__setattr__` refuses every change).
+        self.__dict__.update(
+            robot=robot, family=family, default_mask=forms.flags, default_name=forms.name,
+            _reach_point=None, _kernel_args=None, _samples=int(samples), _seed=int(seed),
+            _threads=threads, _bank=None, _middle=None)
 
     def __setattr__(self, name, value):
         raise AttributeError(f"IKSolver is immutable: cannot set {name}")
@@ -293,11 +287,17 @@ class IKSolver:
 
     @property
     def reach(self) -> float:
-        """`reach_bound` of the robot, m (computed on first use: a closed form does not need
-        it)."""
-        if self._reach is None:
-            object.__setattr__(self, "_reach", reach_bound(self.robot))
-        return self._reach
+        """`reach_bound` of the robot, m (`Chain.reach`, computed once by the chain)."""
+        return self.robot.chain.reach
+
+    @property
+    def _reach_test(self) -> tuple[float, float, float, float]:
+        """Joint 1's axis point (x, y, z) and the distance from it beyond which a target is out
+        of reach (on first use)."""
+        if self._reach_point is None:
+            x, y, z = self.robot.chain.points[0].tolist()
+            object.__setattr__(self, "_reach_point", (x, y, z, self.reach * (1 + 1e-9)))
+        return self._reach_point
 
     @property
     def _mid(self) -> NDArray:
@@ -372,11 +372,11 @@ class IKSolver:
         InputError
             Bad shapes or values of the arguments (never for an unreachable target).
         """
-        T = _pose_fast(targets)
-        if T is not None and (q0 is None or np.shape(q0) == (self.robot.n,)):
+        one = _pose_fast(targets)
+        if one is not None and (q0 is None or np.shape(q0) == (self.robot.n,)):
             task_mask = self.default_mask if mask is None else as_mask(mask)
             if self._family_for(task_mask, method) is None:
-                return self._solve_one(T, q0, task_mask, method, criterion, weights,
+                return self._solve_one(*one, q0, task_mask, method, criterion, weights,
                                        tol_position, tol_rotation, max_iter, restarts, seed,
                                        seeds)
         request = self._validate(targets, q0, mask, method, criterion, weights, tol_position,
@@ -386,43 +386,48 @@ class IKSolver:
         self._numeric(request, beyond, state)
         return self._verdict(request, beyond, state)
 
-    def _solve_one(self, T, q0, mask, method, criterion, weights, tol_position, tol_rotation,
-                   max_iter, restarts, seed, seeds) -> IKResult:
+    def _solve_one(self, T, values, q0, mask, method, criterion, weights, tol_position,
+                   tol_rotation, max_iter, restarts, seed, seeds) -> IKResult:
         """One target, numeric only: the batch path's steps without its batch work (the same
         starts, kernel and verdict, so the same result as that target in a batch). From a
-        given q0 the seed bank is searched only if q0 alone does not converge."""
+        given q0 the seed bank is searched only if q0 alone does not converge.
+
+        T (4, 4) is the checked target (a new array) and values its 16 numbers row by row
+        (`_pose_fast`): what a single call needs is read from them in plain Python, which for
+        a handful of numbers costs a fraction of NumPy's calls on tiny arrays.
+        """
         self._check_options(method, criterion, weights, tol_position, tol_rotation, max_iter,
                             restarts, seed)
         n = self.robot.n
-        if q0 is not None:
-            q0 = joint_array(self.robot, q0, "q0")
-        p = T[:3, 3] - self.robot.chain.points[0]
-        beyond = math.sqrt(float(p @ p)) > self.reach * (1 + 1e-9)
+        first = None if q0 is None else self._start(q0)
+        x0, y0, z0, farthest = self._reach_test
+        dx, dy, dz = values[3] - x0, values[7] - y0, values[11] - z0
+        beyond = math.sqrt(dx * dx + dy * dy + dz * dz) > farthest
         label = method if method in ("lm", "newton") else "lm"
+        code = numeric.METHOD_CODES[label]
         task = numeric.task_args(mask, tol_position, tol_rotation)
         targets = T[None]
         q, converged = np.empty((1, n)), np.zeros(1, dtype=np.bool_)
         iterations, errors = np.zeros(1, dtype=np.int64), np.empty((1, 2))
-        budget = (int(max_iter), 0, numeric.METHOD_CODES[label], int(seed), 0, 0.0, 0)
-        chain, limits = self._kernel.chain, self._kernel.limits
-        if q0 is not None and not beyond:
-            numeric.solve_targets.light(0, 1, targets, np.array(q0.reshape(1, 1, n)), chain, limits,
-                                  task, budget, q, converged, iterations, errors)
+        kernel = self._kernel
+        if first is not None and not beyond:
+            numeric.solve_targets.light(0, 1, targets, first, kernel.chain, kernel.limits,
+                                        task, (int(max_iter), 0, code, int(seed), 0, 0.0, 0),
+                                        q, converged, iterations, errors)
         if not converged[0]:
             bank = self.bank if seeds else None
-            first = q0 if q0 is not None else None
             if bank is not None:
                 starts = bank.starts(targets, mask, SEEDS)
                 if first is not None:
                     starts[0, 1:] = starts[0, :-1].copy()
-                    starts[0, 0] = first
+                    starts[0, 0] = first[0, 0]
             else:
-                starts = np.array((first if first is not None else self._mid).reshape(1, 1, n))
-            budget = (int(max_iter), 0 if beyond else int(restarts),
-                      numeric.METHOD_CODES[label], int(seed), 0, 0.0, 1)
-            numeric.solve_targets.light(0, 1, targets, starts, chain, limits, task, budget, q,
-                                  converged, iterations, errors)
-        pe, re = float(errors[0, 0]), float(errors[0, 1])
+                starts = first if first is not None else self._mid.reshape(1, 1, n).copy()
+            numeric.solve_targets.light(0, 1, targets, starts, kernel.chain, kernel.limits,
+                                        task, (int(max_iter), 0 if beyond else int(restarts),
+                                               code, int(seed), 0, 0.0, 1),
+                                        q, converged, iterations, errors)
+        pe, re = errors[0].tolist()
         success = pe < tol_position and re < tol_rotation
         if success:
             reason = OK
@@ -431,8 +436,18 @@ class IKSolver:
         else:
             reason = str(self._numeric_reasons(q, np.zeros(1, bool), mask, int(max_iter),
                                                int(restarts))[0])
+        name = self.default_name if mask is self.default_mask else mask_name(mask)
         return IKResult(success, q[0], pe, re, int(iterations[0]), reason, label, criterion,
-                        mask_name(mask))
+                        name)
+
+    def _start(self, q0) -> NDArray:
+        """One q0 (n,) as a start (1, 1, n): a new float array of finite joint values."""
+        n = self.robot.n
+        if type(q0) is np.ndarray and q0.dtype is FLOAT and q0.shape == (n,):
+            values = q0.tolist()
+            if all(map(math.isfinite, values)):
+                return np.array(values).reshape(1, 1, n)
+        return np.array(joint_array(self.robot, q0, "q0").reshape(1, 1, n))
 
     def _validate(self, targets, q0, mask, method, criterion, weights, tol_position,
                   tol_rotation, max_iter, restarts, seed, seeds) -> _Request:
@@ -560,8 +575,8 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        _kernels.poses.sized(flat.shape[0], flat, k.kinds, k.offsets, k.pre, k.links,
-                             k.source, k.scale, out, few=_kernels.LIGHT_CONFIGURATIONS)
+        _kernels.poses.sized(flat.shape[0], flat, k.floats, k.ints, out,
+                             few=_kernels.LIGHT_CONFIGURATIONS)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:
@@ -667,9 +682,11 @@ class IKSolver:
                              f"and three pitches, three parallel joints and a wrist, or a "
                              f"spherical wrist), found {self.robot.name}, which only the "
                              f"numeric solvers serve")
-        T = _pose_fast(targets)
+        one = _pose_fast(targets)
         lead = ()
-        if T is None:
+        if one is not None:
+            T = one[0]
+        else:
             T = as_transform(targets, "target")
             lead = T.shape[:-2]
         flat = T.reshape(-1, 4, 4)
@@ -682,10 +699,13 @@ class IKSolver:
         C, errors, flags = analytic.candidates(self.robot.chain, family, flat, np.zeros((N, n)),
                                                mask, tol_position, tol_rotation)
         if lead == ():
-            rows = np.flatnonzero(flags[0, :, 3])
-            k = len(rows)
-            return IKSolutions(C[0, rows], np.ones(k, dtype=bool), flags[0, rows, 2],
-                               errors[0, rows, 0], errors[0, rows, 1], k, family.name, name)
+            # `compress` on basic-indexed views: NumPy's mixed integer and array indexing
+            # (C[0, rows]) costs several times as much for a handful of rows.
+            valid = flags[0, :, 3]
+            q = C[0].compress(valid, axis=0)
+            pe, re = errors[0].T.compress(valid, axis=1)
+            return IKSolutions(q, valid.compress(valid), flags[0, :, 2].compress(valid), pe, re,
+                               len(q), family.name, name)
         valid = flags[..., 3]
         order = np.argsort(~valid, axis=1, kind="stable")      # real rows first, in order
         take = lambda a: np.take_along_axis(a, order, axis=1)  # noqa: E731

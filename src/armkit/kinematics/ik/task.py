@@ -18,7 +18,9 @@ as the target's; roll about it is free).
 
 from __future__ import annotations
 
+import itertools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -52,12 +54,45 @@ def as_mask(mask: str | ArrayLike) -> NDArray:
     return flags.astype(bool)
 
 
+def _frozen(a: NDArray) -> NDArray:
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class MaskForms:
+    """One mask in the forms the solvers use: flags (6,) bool, ints (6,) int64 (the kernels'
+    mask), rows (m,) int64 (the task rows), all read-only, and its name (`mask_name`)."""
+
+    flags: NDArray
+    ints: NDArray
+    rows: NDArray
+    name: str
+
+
+def _forms(flags: tuple[int, ...]) -> MaskForms:
+    names = {value: name for name, value in NAMED_MASKS.items()}
+    return MaskForms(_frozen(np.array(flags, dtype=bool)), _frozen(np.array(flags, np.int64)),
+                     _frozen(np.flatnonzero(flags).astype(np.int64)),
+                     names.get(flags, "".join(str(f) for f in flags)))
+
+
+# Every one of the 63 masks, fixed at import: a single solve looks its mask up instead of
+# building small arrays (a few microseconds each, on a call of a few tens).
+MASK_FORMS = {flags: _forms(flags) for flags in itertools.product((0, 1), repeat=6)
+              if any(flags)}
+
+
+def mask_forms(mask: NDArray) -> MaskForms:
+    """The forms of a mask (6,) of booleans (`as_mask`)."""
+    return MASK_FORMS[tuple(mask.tolist())]    # bools hash and compare as the keys' 0s and 1s
+
+
 def mask_name(mask: NDArray) -> str:
     """The mask's name, or its flags as a string of 0s and 1s."""
-    for name, flags in NAMED_MASKS.items():
-        if tuple(mask.astype(int)) == flags:
-            return name
-    return "".join(str(int(f)) for f in mask)
+    flags = tuple(int(f) for f in mask.tolist())
+    forms = MASK_FORMS.get(flags)
+    return forms.name if forms is not None else "".join(str(f) for f in flags)
 
 
 @_inner
