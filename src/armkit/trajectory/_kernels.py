@@ -210,70 +210,86 @@ def _put(times, values, k, duration, top):
 
 
 @_jit
-def profile_timing(kind, problem, phase, times, values):
-    """Phases of every joint of every problem p; kind 2 trapezoid, 3 double S.
+def _limit(per_joint, number, i):
+    """The limit of flat joint i: per_joint[i % length] (one value per joint, the same for
+    every problem, or one per joint of every problem), or the number when per_joint is empty."""
+    return per_joint[i % per_joint.shape[0]] if per_joint.shape[0] else number
 
-    problem (5, P, n): q0, qf, V, A, J stacked (a trapezoid's J is unused, any positive
-    value); out: times (P, n, K + 1), the start of each phase and the end, and values (P, n, K),
-    the signed top derivative of each phase (K = 3 or 7). Returns 0, or the first bad input:
-    1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit. One problem is a batch of one.
+
+@_jit
+def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
+    """Phases of every joint of every problem; kind 2 trapezoid, 3 double S.
+
+    q0, qf (P n,): start and goal of P problems of n joints, flat. V, A, J: the limits, each
+    one value per joint (length n, for every problem; or P n), or empty for the number v, a or
+    j that holds for every joint (a trapezoid's J is unused: any positive value). Out: times
+    (P n, K + 1), the start of each phase and the end, and values (P n, K), the signed top
+    derivative of each phase (K = 3 or 7). Returns 0, or the first bad input: 1 q0 or qf not
+    finite, 2 V, 3 A, 4 J not a valid limit. One problem and a batch take the same call, and
+    a limit given as a number needs no array.
 
     With phase sync, one shape over a unit distance under the tightest limit per unit distance,
     scaled by each joint's distance; with time sync, the slowest joint's shortest duration for
     every joint.
     """
-    q0, qf, V, A, J = problem[0], problem[1], problem[2], problem[3], problem[4]
-    P, n = q0.shape
-    for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
-        for j in range(n):
-            if not (math.isfinite(q0[p, j]) and math.isfinite(qf[p, j])):
-                return 1
-            if not V[p, j] > 0.0:
-                return 2
-            if not (A[p, j] > 0.0 and (kind == 3 or A[p, j] < math.inf)):
-                return 3
-            if not (0.0 < J[p, j] < math.inf):
-                return 4
+    N = q0.shape[0]
+    P = N // n
+    for i in range(N):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
+        if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):
+            return 1
+        if not _limit(V, v, i) > 0.0:
+            return 2
+        Ai = _limit(A, a, i)
+        if not (Ai > 0.0 and (kind == 3 or Ai < math.inf)):
+            return 3
+        if not (0.0 < _limit(J, j, i) < math.inf):
+            return 4
     own = np.zeros((n, 3))                      # each joint's own (tj, ta, tv)
     for p in range(P):
+        first = p * n
         if phase:
             v1 = a1 = j1 = math.inf
-            for j in range(n):
-                D = abs(qf[p, j] - q0[p, j])
+            for k in range(n):
+                i = first + k
+                D = abs(qf[i] - q0[i])
                 if D > 0.0:
-                    v1, a1, j1 = min(v1, V[p, j] / D), min(a1, A[p, j] / D), min(j1, J[p, j] / D)
+                    v1, a1, j1 = (min(v1, _limit(V, v, i) / D), min(a1, _limit(A, a, i) / D),
+                                  min(j1, _limit(J, j, i) / D))
             if v1 == a1 == j1 == math.inf:
                 tj = ta = tv = 0.0
             elif kind == 2:
                 tj, ta, tv = _trapezoid_shortest(1.0, v1, a1)
             else:
                 tj, ta, tv = _double_s_shortest(1.0, v1, a1, j1)
-            for j in range(n):
-                d = qf[p, j] - q0[p, j]
-                _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j],
-                        values[p, j])
+            for i in range(first, first + n):
+                d = qf[i] - q0[i]
+                _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[i], values[i])
             continue
         T = 0.0
-        for j in range(n):
-            D = abs(qf[p, j] - q0[p, j])
+        for k in range(n):
+            i = first + k
+            D = abs(qf[i] - q0[i])
             if kind == 2:
-                own[j, 0], own[j, 1], own[j, 2] = _trapezoid_shortest(D, V[p, j], A[p, j])
+                own[k, 0], own[k, 1], own[k, 2] = _trapezoid_shortest(D, _limit(V, v, i),
+                                                                      _limit(A, a, i))
             else:
-                own[j, 0], own[j, 1], own[j, 2] = _double_s_shortest(D, V[p, j], A[p, j],
-                                                                     J[p, j])
+                own[k, 0], own[k, 1], own[k, 2] = _double_s_shortest(
+                    D, _limit(V, v, i), _limit(A, a, i), _limit(J, j, i))
             if D > 0.0:
-                T = max(T, 2.0 * own[j, 1] + own[j, 2])
-        for j in range(n):
-            d = qf[p, j] - q0[p, j]
-            tj, ta, tv = own[j, 0], own[j, 1], own[j, 2]
+                T = max(T, 2.0 * own[k, 1] + own[k, 2])
+        for k in range(n):
+            i = first + k
+            d = qf[i] - q0[i]
+            tj, ta, tv = own[k, 0], own[k, 1], own[k, 2]
             if d == 0.0 or 2.0 * ta + tv < T * (1.0 - 1e-12):
                 # Solving for T = the joint's own shortest would amplify rounding through a
                 # square root near zero, so the slowest joint keeps its own profile.
                 if kind == 2:
-                    tj, ta, tv = _trapezoid_within(abs(d), V[p, j], A[p, j], T)
+                    tj, ta, tv = _trapezoid_within(abs(d), _limit(V, v, i), _limit(A, a, i), T)
                 else:
-                    tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
-            _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j], values[p, j])
+                    tj, ta, tv = _double_s_within(abs(d), _limit(V, v, i), _limit(A, a, i),
+                                                  _limit(J, j, i), T)
+            _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[i], values[i])
     return 0
 
 
