@@ -225,14 +225,21 @@ def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
     j that holds for every joint (a trapezoid's J is unused: any positive value). Out: times
     (P n, K + 1), the start of each phase and the end, and values (P n, K), the signed top
     derivative of each phase (K = 3 or 7). Returns 0, or the first bad input: 1 q0 or qf not
-    finite, 2 V, 3 A, 4 J not a valid limit. One problem and a batch take the same call, and
-    a limit given as a number needs no array.
+    finite, 2 V, 3 A, 4 J not a valid limit, 5 lengths that are not P problems of n >= 1
+    joints (nothing is written then; the caller broadcasts). One problem and a batch take the
+    same call, and a limit given as a number needs no array.
 
     With phase sync, one shape over a unit distance under the tightest limit per unit distance,
     scaled by each joint's distance; with time sync, the slowest joint's shortest duration for
     every joint.
     """
     N = q0.shape[0]
+    if not (n > 0 and N % n == 0 and qf.shape[0] == N and times.shape[0] >= N
+            and values.shape[0] >= N):
+        return 5
+    for per_joint in (V, A, J):
+        if not (per_joint.shape[0] <= 1 or per_joint.shape[0] == n or per_joint.shape[0] == N):
+            return 5
     P = N // n
     for i in range(N):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
         if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):

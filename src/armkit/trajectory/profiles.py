@@ -61,11 +61,11 @@ class Profile:
 
     def __init__(self, duration: NDArray, times: NDArray, values: NDArray, order: int,
                  q0: NDArray, qf: NDArray):
-        # The fields as one dict: the __init__ a frozen dataclass writes sets them one by one
-        # through object.__setattr__, a sixth of one profile's time.
-        object.__setattr__(self, "__dict__", {"duration": duration, "times": times,
-                                              "values": values, "order": order, "q0": q0,
-                                              "qf": qf})
+        # Straight into the instance's dict: the __init__ a frozen dataclass writes sets each
+        # field through object.__setattr__, a sixth of one profile's time.
+        fields = self.__dict__
+        fields["duration"], fields["times"], fields["values"] = duration, times, values
+        fields["order"], fields["q0"], fields["qf"] = order, q0, qf
 
     def peaks(self) -> tuple[NDArray, NDArray, NDArray]:
         """Peak |velocity|, |acceleration| and |jerk| (inf for a trapezoid) per joint (..., n)."""
@@ -96,7 +96,8 @@ def trapezoidal_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Arr
     Profile
         ``order`` 2: phases accelerate, cruise, decelerate.
     """
-    return _profile(2, q0, qf, vmax, amax, 1.0, sync)
+    one = _one(2, q0, qf, vmax, amax, 1.0, sync)
+    return one if one is not None else _profile(2, q0, qf, vmax, amax, 1.0, sync)
 
 
 def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -124,7 +125,8 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     >>> p.duration.shape
     (1000,)
     """
-    return _profile(3, q0, qf, vmax, amax, jmax, sync)
+    one = _one(3, q0, qf, vmax, amax, jmax, sync)
+    return one if one is not None else _profile(3, q0, qf, vmax, amax, jmax, sync)
 
 
 def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
@@ -200,27 +202,25 @@ def _trajectory(order: int, times: NDArray, values: NDArray, q0: NDArray,
 
 def _motion(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
             jmax: ArrayLike, sync: str, label: str) -> Trajectory:
-    """`trapezoidal` and `jerk_limited`: one problem's phases straight into the pieces kernel
-    (no `Profile` between), or the general way when the inputs are not one problem."""
+    """`trapezoidal` and `jerk_limited`: one problem's phases (`_one`) into the pieces kernel,
+    or the general way when the inputs are not one problem."""
     one = _one(order, q0, qf, vmax, amax, jmax, sync)
     if one is None:                             # the general way, and its messages
         return profile_trajectory(_profile(order, *_single(q0, qf), vmax, amax, jmax, sync),
                                   label)
-    q0, _, times, values = one
-    return _trajectory(order, times, values, q0, label)
+    return _trajectory(order, one.times, one.values, one.q0, label)
 
 
 _NUMBER = np.empty(0)       # a limit's "no value per joint": the timing kernel takes its number
 _FLOAT = np.dtype(float)    # NumPy converts a dtype given as an instance faster than as a type
-_floats = np.ascontiguousarray
 
 
 def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
-         jmax: ArrayLike, sync: str) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
+         jmax: ArrayLike, sync: str) -> Profile | None:
     """One problem through the timing kernel with as few steps in Python as it takes: q0, qf
     (n,) copied to fresh float arrays, each limit a float passed as a number or an array (n,)
-    (or (1,)) passed as it is. Returns q0, qf, times (n, K + 1) and values (n, K); None for
-    inputs of other kinds or shapes, which take the general way (`_profile`)."""
+    (or (1,)) passed as it is. None for inputs of other kinds or shapes, which take the
+    general way (`_profile`)."""
     if sync != "time" and sync != "phase":
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
     if type(q0) is np.ndarray and q0.ndim != 1:
@@ -228,23 +228,25 @@ def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayL
     try:
         q0, qf = np.array(q0, dtype=_FLOAT), np.array(qf, dtype=_FLOAT)
         # A number as the kernel's number, anything else as an array (a number: shape (1,)).
-        V, v = (_NUMBER, vmax) if type(vmax) is float else (_floats(vmax, dtype=_FLOAT), 0.0)
-        A, a = (_NUMBER, amax) if type(amax) is float else (_floats(amax, dtype=_FLOAT), 0.0)
-        J, j = (_NUMBER, jmax) if type(jmax) is float else (_floats(jmax, dtype=_FLOAT), 0.0)
+        V, v = ((_NUMBER, vmax) if type(vmax) is float
+                else (np.ascontiguousarray(vmax, dtype=_FLOAT), 0.0))
+        A, a = ((_NUMBER, amax) if type(amax) is float
+                else (np.ascontiguousarray(amax, dtype=_FLOAT), 0.0))
+        J, j = ((_NUMBER, jmax) if type(jmax) is float
+                else (np.ascontiguousarray(jmax, dtype=_FLOAT), 0.0))
     except (TypeError, ValueError):
         return None
-    n = len(q0) if q0.ndim == 1 else 0
-    if not (n and qf.shape == q0.shape and V.ndim == A.ndim == J.ndim == 1
-            and (len(V) <= 1 or len(V) == n) and (len(A) <= 1 or len(A) == n)
-            and (len(J) <= 1 or len(J) == n)):
+    if not q0.ndim == qf.ndim == V.ndim == A.ndim == J.ndim == 1:
         return None
-    K = 3 if order == 2 else 7
+    n, K = len(q0), 3 if order == 2 else 7
     times, values = np.empty((n, K + 1)), np.empty((n, K))
     bad = _kernels.profile_timing(order, n, q0, qf, V, A, J, v, a, j, sync == "phase", times,
                                   values)
     if bad:
+        if bad == 5:                            # the lengths are not one problem's
+            return None
         _refuse(bad, order, (vmax, amax, jmax))
-    return q0, qf, times, values
+    return Profile(times[0, -1], times, values, order, q0, qf)
 
 
 def _problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -277,12 +279,10 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
 
 def _profile(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
              jmax: ArrayLike, sync: str) -> Profile:
-    """Run the timing kernel on the problems (a trapezoid's jmax is 1.0, unused); one problem
-    takes the short way (`_one`), a batch is stacked and broadcast first."""
-    one = _one(order, q0, qf, vmax, amax, jmax, sync)
-    if one is not None:
-        q0, qf, times, values = one
-        return Profile(times[0, -1], times, values, order, q0, qf)
+    """Run the timing kernel on the problems (a trapezoid's jmax is 1.0, unused), stacked and
+    broadcast first: a batch, or one problem that `_one` did not take."""
+    if sync != "time" and sync != "phase":
+        raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
     arrays = _problem(q0, qf, vmax, amax, jmax)
     lead, n = arrays.shape[1:], arrays.shape[-1]
     K = 3 if order == 2 else 7
