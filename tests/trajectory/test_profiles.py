@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 import armkit
 from armkit.errors import InputError
-from armkit.trajectory import (Trajectory, jerk_limited, jerk_limited_profile, trapezoidal,
+from armkit.trajectory import (jerk_limited, jerk_limited_profile, trapezoidal,
                                trapezoidal_profile)
 
 RTOL = 1e-9          # limits and goal, relative
@@ -261,18 +261,18 @@ def test_kernel_pieces_pass_the_trajectory_checks_they_skip(joints, sync, vmax_i
     pass the checks all the same, also with infinite vmax or amax."""
     q0, qf, vmax, amax, jmax = (np.array(x) for x in zip(*joints))
     tr = jerk_limited(q0, qf, np.inf if vmax_inf else vmax, amax, jmax, sync=sync)
-    Trajectory(tr.breaks, tr.coefficients)                         # checked: does not raise
+    armkit.Trajectory(tr.breaks, tr.coefficients)          # checked: does not raise
     assert np.isfinite(tr.coefficients).all() and tr.duration >= 0.0
     tr = trapezoidal(q0, qf, vmax, np.where(np.isinf(amax), 3.0, amax), sync=sync)
-    Trajectory(tr.breaks, tr.coefficients)
+    armkit.Trajectory(tr.breaks, tr.coefficients)
 
 
 def test_trajectory_check_false_skips_the_value_checks_not_the_shapes():
     breaks, c = np.array([0.0, 2.0, 1.0]), np.zeros((2, 2, 1))
     with pytest.raises(InputError, match="strictly increasing"):
-        Trajectory(breaks, c)
+        armkit.Trajectory(breaks, c)
     with pytest.raises(InputError, match="finite"):
-        Trajectory([0.0, 1.0], np.full((1, 2, 1), np.nan))
-    assert Trajectory(breaks, c, check=False).breaks.tolist() == [0.0, 2.0, 1.0]
+        armkit.Trajectory([0.0, 1.0], np.full((1, 2, 1), np.nan))
+    assert armkit.Trajectory(breaks, c, check=False).breaks.tolist() == [0.0, 2.0, 1.0]
     with pytest.raises(InputError, match="coefficients: expected shape"):
-        Trajectory(breaks, np.zeros((3, 2, 1)), check=False)
+        armkit.Trajectory(breaks, np.zeros((3, 2, 1)), check=False)
