@@ -16,6 +16,9 @@ import numpy as np
 from armkit.threads import threads_for
 
 _jit = numba.njit(cache=True, nogil=True)
+# The profile kernels divide only by numbers they have checked or tested for zero: under
+# NumPy's error model numba leaves out its division-by-zero checks and compiles them faster.
+_profile_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 _pjit = numba.njit(cache=True, nogil=True, parallel=True)
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
@@ -120,14 +123,14 @@ def run_evaluate(breaks: np.ndarray, table: np.ndarray, t: np.ndarray, out: np.n
 # (tj, ta, tv) = jerk time, accelerating time (= decelerating time), cruise time; a trapezoid
 # has tj = 0. Biagiotti & Melchiorri (2008), sections 3.2.2 and 3.4, zero end velocities.
 
-@_jit
+@_profile_jit
 def _trapezoid_shortest(D, V, A):
     if D * A >= V * V:                          # cruise phase exists
         return 0.0, V / A, D / V - V / A
     return 0.0, math.sqrt(D / A), 0.0
 
 
-@_jit
+@_profile_jit
 def _trapezoid_within(D, V, A, T):
     """The trapezoid taking exactly T (>= its shortest), keeping A: the cruise velocity is the
     smaller root of v^2 - A T v + A D = 0, written 2 D / (T + sqrt(T^2 - 4 D / A))."""
@@ -137,7 +140,7 @@ def _trapezoid_within(D, V, A, T):
     return 0.0, v / A, max(T - 2.0 * v / A, 0.0)
 
 
-@_jit
+@_profile_jit
 def _double_s_shortest(D, V, A, J):
     if V * J >= A * A:                          # amax reached on the way to vmax
         tj, ta = A / J, A / J + V / A
@@ -154,7 +157,7 @@ def _double_s_shortest(D, V, A, J):
     return tj, 2.0 * tj, 0.0
 
 
-@_jit
+@_profile_jit
 def _double_s_within(D, V, A, J, T):
     """The double S taking exactly T (>= its shortest), keeping A and J.
 
@@ -181,7 +184,7 @@ def _double_s_within(D, V, A, J, T):
     return u, 2.0 * u, max(T - 4.0 * u, 0.0)
 
 
-@_jit
+@_profile_jit
 def _phases(kind, D, sign, tj, ta, tv, times, values):
     """One joint's phase start times (from 0) and signed top derivative per phase.
 
@@ -201,7 +204,7 @@ def _phases(kind, D, sign, tj, ta, tv, times, values):
         _put(times, values, k, duration, top)
 
 
-@_jit
+@_profile_jit
 def _put(times, values, k, duration, top):
     if k == 0:
         times[0] = 0.0
@@ -209,14 +212,14 @@ def _put(times, values, k, duration, top):
     values[k] = top
 
 
-@_jit
+@_profile_jit
 def _limit(per_joint, number, i):
     """The limit of flat joint i: per_joint[i % length] (one value per joint, the same for
     every problem, or one per joint of every problem), or the number when per_joint is empty."""
     return per_joint[i % per_joint.shape[0]] if per_joint.shape[0] else number
 
 
-@_jit
+@_profile_jit
 def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
     """Phases of every joint of every problem; kind 2 trapezoid, 3 double S.
 
@@ -237,31 +240,33 @@ def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
     if not (n > 0 and N % n == 0 and qf.shape[0] == N and times.shape[0] >= N
             and values.shape[0] >= N):
         return 5
-    for per_joint in (V, A, J):
-        if not (per_joint.shape[0] <= 1 or per_joint.shape[0] == n or per_joint.shape[0] == N):
+    for L in (V.shape[0], A.shape[0], J.shape[0]):
+        if not (L <= 1 or L == n or L == N):
             return 5
     P = N // n
-    for i in range(N):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
-        if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):
-            return 1
-        if not _limit(V, v, i) > 0.0:
-            return 2
-        Ai = _limit(A, a, i)
-        if not (Ai > 0.0 and (kind == 3 or Ai < math.inf)):
-            return 3
-        if not (0.0 < _limit(J, j, i) < math.inf):
-            return 4
-    own = np.zeros((n, 3))                      # each joint's own (tj, ta, tv)
+    # Per joint of the problem at hand: its own (tj, ta, tv), then its limits V, A, J.
+    own = np.empty((n, 6))
     for p in range(P):
         first = p * n
+        for k in range(n):                      # checks first: 1 q, 2 V, 3 A, 4 J is bad
+            i = first + k
+            if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):
+                return 1
+            Vi, Ai, Ji = _limit(V, v, i), _limit(A, a, i), _limit(J, j, i)
+            if not Vi > 0.0:
+                return 2
+            if not (Ai > 0.0 and (kind == 3 or Ai < math.inf)):
+                return 3
+            if not (0.0 < Ji < math.inf):
+                return 4
+            own[k, 3], own[k, 4], own[k, 5] = Vi, Ai, Ji
         if phase:
             v1 = a1 = j1 = math.inf
             for k in range(n):
-                i = first + k
-                D = abs(qf[i] - q0[i])
+                D = abs(qf[first + k] - q0[first + k])
                 if D > 0.0:
-                    v1, a1, j1 = (min(v1, _limit(V, v, i) / D), min(a1, _limit(A, a, i) / D),
-                                  min(j1, _limit(J, j, i) / D))
+                    v1, a1, j1 = (min(v1, own[k, 3] / D), min(a1, own[k, 4] / D),
+                                  min(j1, own[k, 5] / D))
             if v1 == a1 == j1 == math.inf:
                 tj = ta = tv = 0.0
             elif kind == 2:
@@ -274,14 +279,12 @@ def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
             continue
         T = 0.0
         for k in range(n):
-            i = first + k
-            D = abs(qf[i] - q0[i])
+            D = abs(qf[first + k] - q0[first + k])
             if kind == 2:
-                own[k, 0], own[k, 1], own[k, 2] = _trapezoid_shortest(D, _limit(V, v, i),
-                                                                      _limit(A, a, i))
+                own[k, 0], own[k, 1], own[k, 2] = _trapezoid_shortest(D, own[k, 3], own[k, 4])
             else:
-                own[k, 0], own[k, 1], own[k, 2] = _double_s_shortest(
-                    D, _limit(V, v, i), _limit(A, a, i), _limit(J, j, i))
+                own[k, 0], own[k, 1], own[k, 2] = _double_s_shortest(D, own[k, 3], own[k, 4],
+                                                                     own[k, 5])
             if D > 0.0:
                 T = max(T, 2.0 * own[k, 1] + own[k, 2])
         for k in range(n):
@@ -292,15 +295,14 @@ def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
                 # Solving for T = the joint's own shortest would amplify rounding through a
                 # square root near zero, so the slowest joint keeps its own profile.
                 if kind == 2:
-                    tj, ta, tv = _trapezoid_within(abs(d), _limit(V, v, i), _limit(A, a, i), T)
+                    tj, ta, tv = _trapezoid_within(abs(d), own[k, 3], own[k, 4], T)
                 else:
-                    tj, ta, tv = _double_s_within(abs(d), _limit(V, v, i), _limit(A, a, i),
-                                                  _limit(J, j, i), T)
+                    tj, ta, tv = _double_s_within(abs(d), own[k, 3], own[k, 4], own[k, 5], T)
             _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[i], values[i])
     return 0
 
 
-@_jit
+@_profile_jit
 def profile_pieces(order, times, values, q0, tol):
     """One problem's profile as one piecewise polynomial: breaks (m + 1,) merged over the
     joints (closer than tol x duration count as one) and coefficients (m, order + 1, n), each
