@@ -213,10 +213,17 @@ def _put(times, values, k, duration, top):
 
 
 @_profile_jit
-def _limit(per_joint, number, i):
-    """The limit of flat joint i: per_joint[i % length] (one value per joint, the same for
-    every problem, or one per joint of every problem), or the number when per_joint is empty."""
-    return per_joint[i % per_joint.shape[0]] if per_joint.shape[0] else number
+def _limit(per_joint, number, n, i, k):
+    """The limit of joint k of a problem of n joints, flat index i: per_joint[i] (one value per
+    joint of every problem), per_joint[k] (one per joint, the same for every problem), the
+    one value of a length-1 array, or the number when per_joint is empty. (Branches, not
+    i % length: an integer remainder per limit and joint slowed the batch by a fifth.)"""
+    length = per_joint.shape[0]
+    if length > n:
+        return per_joint[i]
+    if length > 1:
+        return per_joint[k]
+    return per_joint[0] if length else number
 
 
 @_profile_jit
@@ -244,29 +251,33 @@ def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
         if not (L <= 1 or L == n or L == N):
             return 5
     P = N // n
-    # Per joint of the problem at hand: its own (tj, ta, tv), then its limits V, A, J.
+    for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
+        for k in range(n):
+            i = p * n + k
+            if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):
+                return 1
+            if not _limit(V, v, n, i, k) > 0.0:
+                return 2
+            Ai = _limit(A, a, n, i, k)
+            if not (Ai > 0.0 and (kind == 3 or Ai < math.inf)):
+                return 3
+            if not (0.0 < _limit(J, j, n, i, k) < math.inf):
+                return 4
+    # Per joint of the problem at hand: its limits V, A, J, then its own (tj, ta, tv).
     own = np.empty((n, 6))
     for p in range(P):
         first = p * n
-        for k in range(n):                      # checks first: 1 q, 2 V, 3 A, 4 J is bad
+        for k in range(n):
             i = first + k
-            if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):
-                return 1
-            Vi, Ai, Ji = _limit(V, v, i), _limit(A, a, i), _limit(J, j, i)
-            if not Vi > 0.0:
-                return 2
-            if not (Ai > 0.0 and (kind == 3 or Ai < math.inf)):
-                return 3
-            if not (0.0 < Ji < math.inf):
-                return 4
-            own[k, 3], own[k, 4], own[k, 5] = Vi, Ai, Ji
+            own[k, 0], own[k, 1] = _limit(V, v, n, i, k), _limit(A, a, n, i, k)
+            own[k, 2] = _limit(J, j, n, i, k)
         if phase:
             v1 = a1 = j1 = math.inf
             for k in range(n):
                 D = abs(qf[first + k] - q0[first + k])
                 if D > 0.0:
-                    v1, a1, j1 = (min(v1, own[k, 3] / D), min(a1, own[k, 4] / D),
-                                  min(j1, own[k, 5] / D))
+                    v1, a1, j1 = (min(v1, own[k, 0] / D), min(a1, own[k, 1] / D),
+                                  min(j1, own[k, 2] / D))
             if v1 == a1 == j1 == math.inf:
                 tj = ta = tv = 0.0
             elif kind == 2:
@@ -281,23 +292,23 @@ def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
         for k in range(n):
             D = abs(qf[first + k] - q0[first + k])
             if kind == 2:
-                own[k, 0], own[k, 1], own[k, 2] = _trapezoid_shortest(D, own[k, 3], own[k, 4])
+                own[k, 3], own[k, 4], own[k, 5] = _trapezoid_shortest(D, own[k, 0], own[k, 1])
             else:
-                own[k, 0], own[k, 1], own[k, 2] = _double_s_shortest(D, own[k, 3], own[k, 4],
-                                                                     own[k, 5])
+                own[k, 3], own[k, 4], own[k, 5] = _double_s_shortest(D, own[k, 0], own[k, 1],
+                                                                     own[k, 2])
             if D > 0.0:
-                T = max(T, 2.0 * own[k, 1] + own[k, 2])
+                T = max(T, 2.0 * own[k, 4] + own[k, 5])
         for k in range(n):
             i = first + k
             d = qf[i] - q0[i]
-            tj, ta, tv = own[k, 0], own[k, 1], own[k, 2]
+            tj, ta, tv = own[k, 3], own[k, 4], own[k, 5]
             if d == 0.0 or 2.0 * ta + tv < T * (1.0 - 1e-12):
                 # Solving for T = the joint's own shortest would amplify rounding through a
                 # square root near zero, so the slowest joint keeps its own profile.
                 if kind == 2:
-                    tj, ta, tv = _trapezoid_within(abs(d), own[k, 3], own[k, 4], T)
+                    tj, ta, tv = _trapezoid_within(abs(d), own[k, 0], own[k, 1], T)
                 else:
-                    tj, ta, tv = _double_s_within(abs(d), own[k, 3], own[k, 4], own[k, 5], T)
+                    tj, ta, tv = _double_s_within(abs(d), own[k, 0], own[k, 1], own[k, 2], T)
             _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[i], values[i])
     return 0
 
