@@ -276,3 +276,22 @@ def test_trajectory_check_false_skips_the_value_checks_not_the_shapes():
     assert armkit.Trajectory(breaks, c, check=False).breaks.tolist() == [0.0, 2.0, 1.0]
     with pytest.raises(InputError, match="coefficients: expected shape"):
         armkit.Trajectory(breaks, np.zeros((3, 2, 1)), check=False)
+
+
+def test_every_kind_of_limit_takes_the_same_compiled_kernel():
+    """A Robot's limits are read-only arrays, which numba types apart from writable ones: they
+    must not make it compile the timing kernel again (seconds on a first call)."""
+    from armkit.trajectory import _kernels
+    robot = armkit.robot("inspection_6dof")            # finite velocity and acceleration limits
+    q0, qf = np.zeros(6), np.full(6, 0.5)
+    jerk_limited_profile(q0, qf, 1.0, 2.0, 10.0)
+    compiled = set(_kernels.profile_timing.signatures)
+    frozen = np.full(6, 10.0)
+    frozen.setflags(write=False)
+    for limits in [(robot.velocity_limits, robot.acceleration_limits, 10.0),
+                   (robot.velocity_limits, 2, frozen), ([1.0] * 6, np.float32(2.0), frozen[:1]),
+                   (np.full(12, 1.0)[::2], robot.acceleration_limits, np.int64(10))]:
+        jerk_limited(q0, qf, *limits)
+        trapezoidal(q0, qf, *limits[:2], sync="phase")
+        jerk_limited_profile(np.zeros((3, 6)), qf, *limits)
+    assert set(_kernels.profile_timing.signatures) == compiled
