@@ -227,14 +227,21 @@ def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayL
         return None                             # a batch: no copy to find that out
     try:
         q0, qf = np.array(q0, dtype=_FLOAT), np.array(qf, dtype=_FLOAT)
-        # A float as the kernel's number, anything else as an array.
-        V, v = (_NUMBER, vmax) if type(vmax) is float else (_per_joint(vmax), 0.0)
-        A, a = (_NUMBER, amax) if type(amax) is float else (_per_joint(amax), 0.0)
-        J, j = (_NUMBER, jmax) if type(jmax) is float else (_per_joint(jmax), 0.0)
+        # A float as the kernel's number, anything else as an array (a number: shape (1,)).
+        V, v = ((_NUMBER, vmax) if type(vmax) is float
+                else (np.ascontiguousarray(vmax, dtype=_FLOAT), 0.0))
+        A, a = ((_NUMBER, amax) if type(amax) is float
+                else (np.ascontiguousarray(amax, dtype=_FLOAT), 0.0))
+        J, j = ((_NUMBER, jmax) if type(jmax) is float
+                else (np.ascontiguousarray(jmax, dtype=_FLOAT), 0.0))
     except (TypeError, ValueError):
         return None
     if not q0.ndim == qf.ndim == V.ndim == A.ndim == J.ndim == 1:
         return None
+    if not (V.flags.writeable and A.flags.writeable and J.flags.writeable):
+        # Read-only limits (a Robot's): numba types them apart from writable arrays and would
+        # compile the kernel again for every mix of the two.
+        V, A, J = (x if x.flags.writeable else x.copy() for x in (V, A, J))
     n, K = len(q0), 3 if order == 2 else 7
     times, values = np.empty((n, K + 1)), np.empty((n, K))
     bad = _kernels.profile_timing(order, n, q0, qf, V, A, J, v, a, j, sync == "phase", times,
@@ -244,14 +251,6 @@ def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayL
             return None
         _refuse(bad, order, (vmax, amax, jmax))
     return Profile(times[0, -1], times, values, order, q0, qf)
-
-
-def _per_joint(limit: ArrayLike) -> NDArray:
-    """A limit as a writable C-contiguous float array (a number: shape (1,)). A read-only array,
-    such as a `Robot`'s limits, is copied: numba types it apart from a writable one and would
-    compile the timing kernel again for every mix of the two."""
-    values = np.ascontiguousarray(limit, dtype=_FLOAT)
-    return values if values.flags.writeable else values.copy()
 
 
 def _problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
