@@ -218,9 +218,9 @@ _FLOAT = np.dtype(float)    # NumPy converts a dtype given as an instance faster
 def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
          jmax: ArrayLike, sync: str) -> Profile | None:
     """One problem through the timing kernel with as few steps in Python as it takes: q0, qf
-    (n,) copied to fresh float arrays, each limit a float passed as a number or an array (n,)
-    (or (1,)) passed as it is. None for inputs of other kinds or shapes, which take the
-    general way (`_profile`)."""
+    (n,) copied to fresh float arrays (the `Profile` keeps them), each limit a float passed as
+    a number or an array (n,) or (1,) passed as it is (copied only if read-only). None for
+    inputs of other kinds or shapes, which take the general way (`_profile`)."""
     if sync != "time" and sync != "phase":
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
     if type(q0) is np.ndarray and q0.ndim != 1:
