@@ -2,6 +2,7 @@
 
     python benchmarks/trajectory.py            # every case
     python benchmarks/trajectory.py --quick    # fewer repeats, 1e5 samples
+    python benchmarks/trajectory.py --profiles --cpu   # case 3 only, in thread CPU time
 
 1. spline construction, 6 joints through 100 via points: cubic against scipy's CubicSpline
    (the same clamped spline), quintic against scipy's make_interp_spline (the same C4 quintic),
@@ -19,13 +20,16 @@
 Every figure is min-median-max over rounds in which armkit and its reference take turns
 (benchmarks/common.py); every ratio is reference time / armkit time (above 1: armkit faster),
 the ratio of the medians with the range of the per-round ratios. The load average is printed
-before and after.
+before and after. With ``--cpu`` case 3 is timed in this thread's CPU time instead of wall
+time: on a shared, loaded machine the time the thread waits for a core then stays out, and
+single calls of a few microseconds vary less from run to run.
 """
 
 from __future__ import annotations
 
 import argparse
 import logging
+import time
 
 import numpy as np
 import ruckig
@@ -49,6 +53,18 @@ def line(case: str, ours: Spread, name: str, ref: Spread, unit: str = "ms"):
 def pair(ours, reference, rounds: int, number: int = 1) -> tuple[Spread, Spread]:
     times = interleaved({"ours": ours, "reference": reference}, rounds, number)
     return times["ours"], times["reference"]
+
+
+def thread_interleaved(functions, rounds: int, number: int = 1) -> dict[str, Spread]:
+    """`common.interleaved` in this thread's CPU time (`time.thread_time`), not wall time."""
+    times: dict[str, list[float]] = {name: [] for name in functions}
+    for _ in range(rounds):
+        for name, f in functions.items():
+            start = time.thread_time()
+            for _ in range(number):
+                f()
+            times[name].append((time.thread_time() - start) / number)
+    return {name: Spread(tuple(t)) for name, t in times.items()}
 
 
 def per(spread: Spread, count: int) -> Spread:
@@ -124,8 +140,11 @@ def evaluation(rng, count: int, repeat: int) -> None:
         line("", times["ours"], "NumPy Horner", times["numpy"])
 
 
-def profiles(rng, pairs: int, repeat: int) -> None:
-    print(f"3. jerk-limited profiles, 6 joints, {pairs} random start/goal pairs, time sync")
+def profiles(rng, pairs: int, repeat: int, cpu: bool = False) -> None:
+    clock = "thread CPU time" if cpu else "wall time"
+    print(f"3. jerk-limited profiles, 6 joints, {pairs} random start/goal pairs, time sync "
+          f"({clock})")
+    timed = thread_interleaved if cpu else interleaved
     q0, qf = rng.uniform(-3, 3, (pairs, 6)), rng.uniform(-3, 3, (pairs, 6))
     vmax, amax, jmax = rng.uniform(0.5, 2, 6), rng.uniform(1, 4, 6), rng.uniform(2, 20, 6)
     otg, inp, out = ruckig.Ruckig(6), ruckig.InputParameter(6), ruckig.Trajectory(6)
@@ -142,7 +161,9 @@ def profiles(rng, pairs: int, repeat: int) -> None:
 
     ours = jerk_limited_profile(q0, qf, vmax, amax, jmax).duration
     worst = np.abs(ours / reference() - 1).max()
-    batch, loop = pair(lambda: jerk_limited_profile(q0, qf, vmax, amax, jmax), reference, repeat)
+    times = timed({"ours": lambda: jerk_limited_profile(q0, qf, vmax, amax, jmax),
+                   "reference": reference}, repeat)
+    batch, loop = times["ours"], times["reference"]
     line("batch jerk_limited_profile, per pair", per(batch, pairs), "ruckig.calculate, per pair",
          per(loop, pairs), "us")
     inp.current_position, inp.target_position = starts[0], goals[0]
@@ -154,10 +175,10 @@ def profiles(rng, pairs: int, repeat: int) -> None:
         otg.calculate(inp, out)
         return [(p.t, p.j) for p in out.profiles[0]]
 
-    times = interleaved({"profile": lambda: jerk_limited_profile(a, b, vmax, amax, jmax),
-                         "trajectory": lambda: jerk_limited(a, b, vmax, amax, jmax),
-                         "ruckig": lambda: otg.calculate(inp, out),
-                         "ruckig phases": ruckig_phases}, repeat, number=1000)
+    times = timed({"profile": lambda: jerk_limited_profile(a, b, vmax, amax, jmax),
+                   "trajectory": lambda: jerk_limited(a, b, vmax, amax, jmax),
+                   "ruckig": lambda: otg.calculate(inp, out),
+                   "ruckig phases": ruckig_phases}, repeat, number=1000)
     line("one jerk_limited_profile call", times["profile"], "one ruckig.calculate",
          times["ruckig"], "us")
     line("one jerk_limited (a Trajectory)", times["trajectory"], "one ruckig.calculate",
@@ -199,6 +220,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats, 1e5 samples")
     parser.add_argument("--profiles", action="store_true", help="only the profiles (case 3)")
+    parser.add_argument("--cpu", action="store_true",
+                        help="time case 3 in thread CPU time instead of wall time")
     args = parser.parse_args()
     repeat = 3 if args.quick else 7
     rng = np.random.default_rng(0)
@@ -208,12 +231,12 @@ def main() -> None:
     print(load())
     print(f"  {'':38} {'armkit':>28}   {'reference':26} {'':>28}   ratio [per round]")
     if args.profiles:
-        profiles(rng, 1000, repeat)
+        profiles(rng, 1000, repeat, args.cpu)
         print(load())
         return
     splines(rng, repeat)
     evaluation(rng, 100_000 if args.quick else 1_000_000, repeat)
-    profiles(rng, 1000, repeat)
+    profiles(rng, 1000, repeat, args.cpu)
     retiming(rng, repeat)
     print(load())
 

@@ -3,6 +3,8 @@ durations (and positions) equal to ruckig's for the same limits."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import ruckig
@@ -188,3 +190,110 @@ def test_limits_and_goal_hold_for_random_cases(joints, sync):
         return
     check_motion(jerk_limited(q0, qf, vmax, amax, jmax, sync=sync), q0, qf, vmax, amax, jmax)
     check_motion(trapezoidal(q0, qf, vmax, amax, sync=sync), q0, qf, vmax, amax)
+
+
+@pytest.mark.parametrize("limits", [
+    (1.0, 2.0, 10.0),                                               # numbers: no arrays made
+    (1, 2, 10),                                                     # ints
+    (np.float64(1.0), np.array(2.0), [10.0]),                       # NumPy scalar, 0-d, (1,)
+    ([0.5, 1, 2, 0.7], np.r_[1.0, 2, 3, 4], np.arange(10, 50, 10)),  # list, floats, ints
+    (np.linspace(0.5, 2, 8)[::2], 2.0, np.array([5.0, 6, 7, 8], dtype=np.float32)),  # strided
+])
+@pytest.mark.parametrize("sync", ["time", "phase"])
+def test_one_problem_equals_the_same_problem_as_a_batch(limits, sync):
+    rng = np.random.default_rng(5)
+    q0, qf = rng.uniform(-2, 2, 4), rng.uniform(-2, 2, 4)
+    qf[2] = q0[2]                                   # a joint that does not move
+    for single, batch in ((jerk_limited_profile, jerk_limited_profile),
+                          (trapezoidal_profile, trapezoidal_profile)):
+        args = limits if single is jerk_limited_profile else limits[:2]
+        one = single(list(q0), qf, *args, sync=sync)
+        many = batch(q0[None], qf, *(np.broadcast_to(np.asarray(x, float), (1, 4))
+                                      for x in args), sync=sync)
+        assert type(one.duration) is np.float64 and one.times.shape == many.times.shape[1:]
+        assert one.duration == many.duration[0]
+        for name in ("times", "values", "q0", "qf"):
+            np.testing.assert_array_equal(getattr(one, name), getattr(many, name)[0])
+
+
+def test_a_single_profile_owns_its_arrays_and_is_frozen():
+    q0, qf = np.zeros(3), np.array([1.0, -2.0, 0.5])
+    p = jerk_limited_profile(q0, qf, 1.0, 2.0, 10.0)
+    q0[:], qf[:] = 7.0, 7.0                         # the caller reuses its buffers
+    np.testing.assert_array_equal(p.q0, 0.0)
+    np.testing.assert_array_equal(p.qf, [1.0, -2.0, 0.5])
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        p.duration = 1.0
+    same = dataclasses.replace(p)
+    assert same.duration == p.duration and same.times is p.times and same.order == 3
+    assert [f.name for f in dataclasses.fields(p)] == ["duration", "times", "values", "order",
+                                                       "q0", "qf"]
+
+
+def test_shapes_of_no_single_problem_take_the_general_way():
+    q0, qf = np.zeros(3), np.ones(3)
+    p = jerk_limited_profile(q0, qf, np.array([[1.0], [2.0]]), 2.0, 10.0)    # two problems
+    assert p.duration.shape == (2,) and p.duration[0] > p.duration[1]
+    p = jerk_limited_profile(q0, np.ones((2, 3)), 1.0, 2.0, 10.0)
+    assert p.times.shape == (2, 3, 8)
+    with pytest.raises(InputError, match="broadcast"):
+        jerk_limited_profile(q0, qf, [1.0, 2.0], 2.0, 10.0)
+    with pytest.raises(InputError, match="n >= 1 joints"):
+        jerk_limited_profile([], [], 1.0, 2.0, 10.0)
+    with pytest.raises(InputError, match="one problem"):
+        jerk_limited(q0, qf, np.ones((2, 3)), 2.0, 10.0)
+
+
+def test_bad_limits_of_one_problem_are_named_with_their_values():
+    with pytest.raises(InputError, match=r"amax: expected positive limits, found \[-2.0, 1.0\]"):
+        jerk_limited_profile([0.0, 0.0], [1.0, 1.0], 1.0, np.array([1.0, -2.0]), 10.0)
+    with pytest.raises(InputError, match=r"vmax: expected positive limits, found \[0.0\]"):
+        trapezoidal([0.0], [1.0], 0, 1.0)
+    with pytest.raises(InputError, match="finite joint values"):
+        jerk_limited([0.0, np.nan], [1.0, 1.0], 1.0, 1.0, 1.0)
+
+
+@given(st.lists(st.tuples(st.floats(-5, 5), st.floats(-5, 5), limits,
+                          st.one_of(limits, st.just(np.inf)), limits), min_size=1, max_size=4),
+       st.sampled_from(["time", "phase"]), st.booleans())
+def test_kernel_pieces_pass_the_trajectory_checks_they_skip(joints, sync, vmax_inf):
+    """jerk_limited builds its Trajectory with check=False: its breaks and coefficients must
+    pass the checks all the same, also with infinite vmax or amax."""
+    q0, qf, vmax, amax, jmax = (np.array(x) for x in zip(*joints))
+    tr = jerk_limited(q0, qf, np.inf if vmax_inf else vmax, amax, jmax, sync=sync)
+    armkit.Trajectory(tr.breaks, tr.coefficients)          # checked: does not raise
+    assert np.isfinite(tr.coefficients).all() and tr.duration >= 0.0
+    tr = trapezoidal(q0, qf, vmax, np.where(np.isinf(amax), 3.0, amax), sync=sync)
+    armkit.Trajectory(tr.breaks, tr.coefficients)
+
+
+def test_trajectory_check_false_skips_the_value_checks_not_the_shapes():
+    breaks, c = np.array([0.0, 2.0, 1.0]), np.zeros((2, 2, 1))
+    with pytest.raises(InputError, match="strictly increasing"):
+        armkit.Trajectory(breaks, c)
+    with pytest.raises(InputError, match="finite"):
+        armkit.Trajectory([0.0, 1.0], np.full((1, 2, 1), np.nan))
+    assert armkit.Trajectory(breaks, c, check=False).breaks.tolist() == [0.0, 2.0, 1.0]
+    with pytest.raises(InputError, match="coefficients: expected shape"):
+        armkit.Trajectory(breaks, np.zeros((3, 2, 1)), check=False)
+
+
+def test_every_kind_of_limit_takes_the_same_compiled_kernel(monkeypatch):
+    """A Robot's limits are read-only arrays, which numba types apart from writable ones: they
+    must not make it compile the timing kernel again (seconds on a first call)."""
+    from armkit import jit
+    from armkit.trajectory import _kernels
+    monkeypatch.setattr(jit, "mode", "compiled")           # every call compiled, as in a batch
+    robot = armkit.robot("inspection_6dof")            # finite velocity and acceleration limits
+    q0, qf = np.zeros(6), np.full(6, 0.5)
+    jerk_limited_profile(q0, qf, 1.0, 2.0, 10.0)
+    compiled = set(_kernels.profile_timing.dispatcher.signatures)
+    frozen = np.full(6, 10.0)
+    frozen.setflags(write=False)
+    for limits in [(robot.velocity_limits, robot.acceleration_limits, 10.0),
+                   (robot.velocity_limits, 2, frozen), ([1.0] * 6, np.float32(2.0), frozen[:1]),
+                   (np.full(12, 1.0)[::2], robot.acceleration_limits, np.int64(10))]:
+        jerk_limited(q0, qf, *limits)
+        trapezoidal(q0, qf, *limits[:2], sync="phase")
+        jerk_limited_profile(np.zeros((3, 6)), qf, *limits)
+    assert set(_kernels.profile_timing.dispatcher.signatures) == compiled

@@ -16,11 +16,14 @@ from armkit.jit import kernel, numba_threads, prange
 from armkit.threads import threads_for
 
 _jit = kernel(cache=True, nogil=True)
+# The profile kernels divide only by numbers they have checked or tested for zero: under
+# NumPy's error model numba leaves out its division-by-zero checks and compiles them faster.
+_profile_jit = kernel(cache=True, nogil=True, error_model="numpy")
 _pjit = kernel(cache=True, nogil=True, parallel=True)
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
 _CHUNK = 16384              # samples per parallel task
-LIGHT_SAMPLES = 4096       # samples an evaluation runs as Python before its kernel is compiled
+LIGHT_SAMPLES = 4096        # samples an evaluation runs as Python before its kernel is compiled
 _BLOCK = 256                # samples of one piece evaluated together
 _RUN = 8                    # shorter runs of samples in one piece go one by one
 
@@ -118,14 +121,14 @@ def run_evaluate(breaks: np.ndarray, table: np.ndarray, t: np.ndarray, out: np.n
 # (tj, ta, tv) = jerk time, accelerating time (= decelerating time), cruise time; a trapezoid
 # has tj = 0. Biagiotti & Melchiorri (2008), sections 3.2.2 and 3.4, zero end velocities.
 
-@_jit
+@_profile_jit
 def _trapezoid_shortest(D, V, A):
     if D * A >= V * V:                          # cruise phase exists
         return 0.0, V / A, D / V - V / A
     return 0.0, math.sqrt(D / A), 0.0
 
 
-@_jit
+@_profile_jit
 def _trapezoid_within(D, V, A, T):
     """The trapezoid taking exactly T (>= its shortest), keeping A: the cruise velocity is the
     smaller root of v^2 - A T v + A D = 0, written 2 D / (T + sqrt(T^2 - 4 D / A))."""
@@ -135,7 +138,7 @@ def _trapezoid_within(D, V, A, T):
     return 0.0, v / A, max(T - 2.0 * v / A, 0.0)
 
 
-@_jit
+@_profile_jit
 def _double_s_shortest(D, V, A, J):
     if V * J >= A * A:                          # amax reached on the way to vmax
         tj, ta = A / J, A / J + V / A
@@ -152,7 +155,7 @@ def _double_s_shortest(D, V, A, J):
     return tj, 2.0 * tj, 0.0
 
 
-@_jit
+@_profile_jit
 def _double_s_within(D, V, A, J, T):
     """The double S taking exactly T (>= its shortest), keeping A and J.
 
@@ -179,7 +182,7 @@ def _double_s_within(D, V, A, J, T):
     return u, 2.0 * u, max(T - 4.0 * u, 0.0)
 
 
-@_jit
+@_profile_jit
 def _phases(kind, D, sign, tj, ta, tv, times, values):
     """One joint's phase start times (from 0) and signed top derivative per phase.
 
@@ -199,7 +202,7 @@ def _phases(kind, D, sign, tj, ta, tv, times, values):
         _put(times, values, k, duration, top)
 
 
-@_jit
+@_profile_jit
 def _put(times, values, k, duration, top):
     if k == 0:
         times[0] = 0.0
@@ -207,75 +210,108 @@ def _put(times, values, k, duration, top):
     values[k] = top
 
 
-@_jit
-def profile_timing(kind, problem, phase, times, values):
-    """Phases of every joint of every problem p; kind 2 trapezoid, 3 double S.
+@_profile_jit
+def _limit(per_joint, number, n, i, k):
+    """The limit of joint k of a problem of n joints, flat index i: per_joint[i] (one value per
+    joint of every problem), per_joint[k] (one per joint, the same for every problem), the
+    one value of a length-1 array, or the number when per_joint is empty. (Branches, not
+    i % length: an integer remainder per limit and joint slowed the batch by a fifth.)"""
+    length = per_joint.shape[0]
+    if length > n:
+        return per_joint[i]
+    if length > 1:
+        return per_joint[k]
+    return per_joint[0] if length else number
 
-    problem (5, P, n): q0, qf, V, A, J stacked (a trapezoid's J is unused, any positive
-    value); out: times (P, n, K + 1), the start of each phase and the end, and values (P, n, K),
-    the signed top derivative of each phase (K = 3 or 7). Returns 0, or the first bad input:
-    1 q0 or qf not finite, 2 V, 3 A, 4 J not a valid limit. One problem is a batch of one.
+
+@_profile_jit
+def profile_timing(kind, n, q0, qf, V, A, J, v, a, j, phase, times, values):
+    """Phases of every joint of every problem; kind 2 trapezoid, 3 double S.
+
+    q0, qf (P n,): start and goal of P problems of n joints, flat. V, A, J: the limits, each
+    one value per joint (length n, for every problem; or P n), or empty for the number v, a or
+    j that holds for every joint (a trapezoid's J is unused: any positive value). Out: times
+    (P n, K + 1), the start of each phase and the end, and values (P n, K), the signed top
+    derivative of each phase (K = 3 or 7). Returns 0, or the first bad input: 1 q0 or qf not
+    finite, 2 V, 3 A, 4 J not a valid limit, 5 lengths that are not P problems of n >= 1
+    joints (nothing is written then; the caller broadcasts). One problem and a batch take the
+    same call, and a limit given as a number needs no array.
 
     With phase sync, one shape over a unit distance under the tightest limit per unit distance,
     scaled by each joint's distance; with time sync, the slowest joint's shortest duration for
     every joint.
     """
-    q0, qf, V, A, J = problem[0], problem[1], problem[2], problem[3], problem[4]
-    P, n = q0.shape
+    N = q0.shape[0]
+    if not (n > 0 and N % n == 0 and qf.shape[0] == N and times.shape[0] >= N
+            and values.shape[0] >= N):
+        return 5
+    for L in (V.shape[0], A.shape[0], J.shape[0]):
+        if not (L <= 1 or L == n or L == N):
+            return 5
+    P = N // n
     for p in range(P):                          # checks first: 1 q, 2 V, 3 A, 4 J is bad
-        for j in range(n):
-            if not (math.isfinite(q0[p, j]) and math.isfinite(qf[p, j])):
+        for k in range(n):
+            i = p * n + k
+            if not (math.isfinite(q0[i]) and math.isfinite(qf[i])):
                 return 1
-            if not V[p, j] > 0.0:
+            if not _limit(V, v, n, i, k) > 0.0:
                 return 2
-            if not (A[p, j] > 0.0 and (kind == 3 or A[p, j] < math.inf)):
+            Ai = _limit(A, a, n, i, k)
+            if not (Ai > 0.0 and (kind == 3 or Ai < math.inf)):
                 return 3
-            if not (0.0 < J[p, j] < math.inf):
+            if not (0.0 < _limit(J, j, n, i, k) < math.inf):
                 return 4
-    own = np.zeros((n, 3))                      # each joint's own (tj, ta, tv)
+    # Per joint of the problem at hand: its limits V, A, J, then its own (tj, ta, tv).
+    own = np.empty((n, 6))
     for p in range(P):
+        first = p * n
+        for k in range(n):
+            i = first + k
+            own[k, 0], own[k, 1] = _limit(V, v, n, i, k), _limit(A, a, n, i, k)
+            own[k, 2] = _limit(J, j, n, i, k)
         if phase:
             v1 = a1 = j1 = math.inf
-            for j in range(n):
-                D = abs(qf[p, j] - q0[p, j])
+            for k in range(n):
+                D = abs(qf[first + k] - q0[first + k])
                 if D > 0.0:
-                    v1, a1, j1 = min(v1, V[p, j] / D), min(a1, A[p, j] / D), min(j1, J[p, j] / D)
+                    v1, a1, j1 = (min(v1, own[k, 0] / D), min(a1, own[k, 1] / D),
+                                  min(j1, own[k, 2] / D))
             if v1 == a1 == j1 == math.inf:
                 tj = ta = tv = 0.0
             elif kind == 2:
                 tj, ta, tv = _trapezoid_shortest(1.0, v1, a1)
             else:
                 tj, ta, tv = _double_s_shortest(1.0, v1, a1, j1)
-            for j in range(n):
-                d = qf[p, j] - q0[p, j]
-                _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j],
-                        values[p, j])
+            for i in range(first, first + n):
+                d = qf[i] - q0[i]
+                _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[i], values[i])
             continue
         T = 0.0
-        for j in range(n):
-            D = abs(qf[p, j] - q0[p, j])
+        for k in range(n):
+            D = abs(qf[first + k] - q0[first + k])
             if kind == 2:
-                own[j, 0], own[j, 1], own[j, 2] = _trapezoid_shortest(D, V[p, j], A[p, j])
+                own[k, 3], own[k, 4], own[k, 5] = _trapezoid_shortest(D, own[k, 0], own[k, 1])
             else:
-                own[j, 0], own[j, 1], own[j, 2] = _double_s_shortest(D, V[p, j], A[p, j],
-                                                                     J[p, j])
+                own[k, 3], own[k, 4], own[k, 5] = _double_s_shortest(D, own[k, 0], own[k, 1],
+                                                                     own[k, 2])
             if D > 0.0:
-                T = max(T, 2.0 * own[j, 1] + own[j, 2])
-        for j in range(n):
-            d = qf[p, j] - q0[p, j]
-            tj, ta, tv = own[j, 0], own[j, 1], own[j, 2]
+                T = max(T, 2.0 * own[k, 4] + own[k, 5])
+        for k in range(n):
+            i = first + k
+            d = qf[i] - q0[i]
+            tj, ta, tv = own[k, 3], own[k, 4], own[k, 5]
             if d == 0.0 or 2.0 * ta + tv < T * (1.0 - 1e-12):
                 # Solving for T = the joint's own shortest would amplify rounding through a
                 # square root near zero, so the slowest joint keeps its own profile.
                 if kind == 2:
-                    tj, ta, tv = _trapezoid_within(abs(d), V[p, j], A[p, j], T)
+                    tj, ta, tv = _trapezoid_within(abs(d), own[k, 0], own[k, 1], T)
                 else:
-                    tj, ta, tv = _double_s_within(abs(d), V[p, j], A[p, j], J[p, j], T)
-            _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[p, j], values[p, j])
+                    tj, ta, tv = _double_s_within(abs(d), own[k, 0], own[k, 1], own[k, 2], T)
+            _phases(kind, abs(d), math.copysign(1.0, d), tj, ta, tv, times[i], values[i])
     return 0
 
 
-@_jit
+@_profile_jit
 def profile_pieces(order, times, values, q0, tol):
     """One problem's profile as one piecewise polynomial: breaks (m + 1,) merged over the
     joints (closer than tol x duration count as one) and coefficients (m, order + 1, n), each

@@ -10,7 +10,7 @@ that a trajectory known only by its samples (a Cartesian line through IK) fits i
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import InitVar, dataclass
 from functools import cached_property
 
 import numpy as np
@@ -61,6 +61,10 @@ class Trajectory:
         point-to-point motion). Defaults to the start and the end.
     label : str
         What built it: ``"quintic"``, ``"4-5-5"``, ``"jerk-limited"``, ...
+    check : bool
+        False skips the checks of the values (finite, breaks increasing; the shapes are always
+        checked), as scipy's ``check_finite=False``: for arrays right by construction, as a
+        builder's kernel makes them from inputs it has checked.
 
     Raises
     ------
@@ -72,25 +76,18 @@ class Trajectory:
     coefficients: NDArray
     knots: NDArray = None
     label: str = ""
+    check: InitVar[bool] = True
 
-    def __post_init__(self):
+    def __post_init__(self, check: bool):
         breaks, coefficients = _frozen(self.breaks), _frozen(self.coefficients)
         if breaks.ndim != 1 or breaks.shape[0] < 2:
             raise InputError(f"breaks: expected shape (m + 1,) with m >= 1, found {breaks.shape}")
         if coefficients.ndim != 3 or coefficients.shape[0] != breaks.shape[0] - 1:
             raise InputError(f"coefficients: expected shape ({breaks.shape[0] - 1}, K, n), "
                              f"found {coefficients.shape}")
-        # A finite sum has no NaN or inf in it (the cheap test for a few pieces); a sum that
-        # is not finite may still be an overflow of finite values, so look again.
-        if not (math.isfinite(breaks.sum()) and math.isfinite(coefficients.sum())) and not (
-                np.isfinite(breaks).all() and np.isfinite(coefficients).all()):
-            raise InputError("trajectory: expected finite breaks and coefficients, found NaN or "
-                             "inf")
         m = breaks.shape[0] - 1
-        resting = m == 1 and breaks[0] == breaks[1]                     # see `at_rest`
-        if not ((breaks[1:] > breaks[:-1]).all() or resting):
-            raise InputError("breaks: expected strictly increasing times, found "
-                             f"{np.array2string(breaks, threshold=8)}")
+        if check:
+            _check_values(breaks, coefficients)
         knots = breaks[::m] if self.knots is None else frozen_array(self.knots)
         object.__setattr__(self, "breaks", breaks)
         object.__setattr__(self, "coefficients", coefficients)
@@ -213,6 +210,20 @@ class Trajectory:
         ndarray, shape (m, S, n)
         """
         return piece_values(self.coefficients, np.asarray(tau, dtype=float), derivative)
+
+
+def _check_values(breaks: NDArray, coefficients: NDArray) -> None:
+    """Raise unless every value is finite and the breaks increase strictly (a motion of zero
+    duration, breaks [t, t] and one piece, is the exception: see `at_rest`)."""
+    # A finite sum has no NaN or inf in it (the cheap test for a few pieces); a sum that is
+    # not finite may still be an overflow of finite values, so look again.
+    if not (math.isfinite(breaks.sum()) and math.isfinite(coefficients.sum())) and not (
+            np.isfinite(breaks).all() and np.isfinite(coefficients).all()):
+        raise InputError("trajectory: expected finite breaks and coefficients, found NaN or inf")
+    resting = breaks.shape[0] == 2 and breaks[0] == breaks[1]
+    if not ((breaks[1:] > breaks[:-1]).all() or resting):
+        raise InputError("breaks: expected strictly increasing times, found "
+                         f"{np.array2string(breaks, threshold=8)}")
 
 
 def _frozen(a: ArrayLike) -> NDArray:

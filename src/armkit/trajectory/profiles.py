@@ -34,7 +34,7 @@ from armkit.trajectory.piecewise import Trajectory, at_rest
 Sync = Literal["time", "phase"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Profile:
     """Synchronised rest-to-rest profiles; leading shape (...) one per problem, n joints.
 
@@ -58,6 +58,14 @@ class Profile:
     order: int
     q0: NDArray
     qf: NDArray
+
+    def __init__(self, duration: NDArray, times: NDArray, values: NDArray, order: int,
+                 q0: NDArray, qf: NDArray):
+        # Straight into the instance's dict: the __init__ a frozen dataclass writes sets each
+        # field through object.__setattr__, a sixth of one profile's time.
+        fields = self.__dict__
+        fields["duration"], fields["times"], fields["values"] = duration, times, values
+        fields["order"], fields["q0"], fields["qf"] = order, q0, qf
 
     def peaks(self) -> tuple[NDArray, NDArray, NDArray]:
         """Peak |velocity|, |acceleration| and |jerk| (inf for a trapezoid) per joint (..., n)."""
@@ -88,7 +96,8 @@ def trapezoidal_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Arr
     Profile
         ``order`` 2: phases accelerate, cruise, decelerate.
     """
-    return _profile(2, q0, qf, vmax, amax, 1.0, sync)
+    one = _one(2, q0, qf, vmax, amax, 1.0, sync)
+    return one if one is not None else _profile(2, q0, qf, vmax, amax, 1.0, sync)
 
 
 def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -116,7 +125,8 @@ def jerk_limited_profile(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: Ar
     >>> p.duration.shape
     (1000,)
     """
-    return _profile(3, q0, qf, vmax, amax, jmax, sync)
+    one = _one(3, q0, qf, vmax, amax, jmax, sync)
+    return one if one is not None else _profile(3, q0, qf, vmax, amax, jmax, sync)
 
 
 def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
@@ -137,8 +147,7 @@ def trapezoidal(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike, 
     Trajectory
         Piecewise quadratic from t = 0, label ``"trapezoidal"``.
     """
-    return profile_trajectory(trapezoidal_profile(*_single(q0, qf), vmax, amax, sync=sync),
-                              "trapezoidal")
+    return _motion(2, q0, qf, vmax, amax, 1.0, sync, "trapezoidal")
 
 
 def jerk_limited(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -160,8 +169,7 @@ def jerk_limited(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
         Piecewise cubic from t = 0, label ``"jerk-limited"``; the duration equals ruckig's
         (time synchronisation) for the same limits.
     """
-    return profile_trajectory(jerk_limited_profile(*_single(q0, qf), vmax, amax, jmax,
-                                                   sync=sync), "jerk-limited")
+    return _motion(3, q0, qf, vmax, amax, jmax, sync, "jerk-limited")
 
 
 def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
@@ -173,37 +181,76 @@ def profile_trajectory(profile: Profile, label: str = "") -> Trajectory:
     if profile.duration.ndim != 0:
         raise InputError(f"profile: expected one problem (leading shape ()), found "
                          f"{profile.duration.shape}")
-    if not profile.duration > 0:                    # the goal is the start
-        return at_rest(profile.q0, label)
-    breaks, c = _kernels.profile_pieces.light(profile.order, np.ascontiguousarray(profile.times),
-                                        np.ascontiguousarray(profile.values),
-                                        np.ascontiguousarray(profile.q0, dtype=float), 1e-12)
+    return _trajectory(profile.order, np.ascontiguousarray(profile.times),
+                       np.ascontiguousarray(profile.values),
+                       np.ascontiguousarray(profile.q0, dtype=float), label)
+
+
+def _trajectory(order: int, times: NDArray, values: NDArray, q0: NDArray,
+                label: str) -> Trajectory:
+    """One problem's phases (C-contiguous times (n, P + 1), values (n, P), q0 (n,)) as a
+    `Trajectory`."""
+    if not times[0, -1] > 0:                    # the goal is the start
+        return at_rest(q0, label)
+    breaks, c = _kernels.profile_pieces.light(order, times, values, q0, 1e-12)
     breaks.setflags(write=False)                # fresh and ours: the Trajectory keeps them
     c.setflags(write=False)
-    return Trajectory(breaks, c, label=label)
+    # The kernel's breaks increase by construction and its values are finite for checked
+    # inputs (tests/trajectory/test_profiles.py checks them again): the Trajectory need not.
+    return Trajectory(breaks, c, label=label, check=False)
 
 
-def _one_problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
-                 jmax: ArrayLike) -> NDArray | None:
-    """One problem, q0 and qf arrays (n,) with limits that are numbers or (n,), stacked as
-    (5, 1, n) without asking NumPy to broadcast the shapes first; None for anything else."""
-    if not (type(q0) is np.ndarray and type(qf) is np.ndarray and q0.ndim == 1
-            and q0.shape == qf.shape and q0.shape[0] > 0):
-        return None
-    shape = q0.shape
-    if (type(vmax) is np.ndarray and type(amax) is np.ndarray and type(jmax) is np.ndarray
-            and vmax.shape == amax.shape == jmax.shape == shape):
-        return np.array((q0, qf, vmax, amax, jmax), dtype=float).reshape(5, 1, shape[0])
-    stacked = np.empty((5, 1, shape[0]))
+def _motion(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+            jmax: ArrayLike, sync: str, label: str) -> Trajectory:
+    """`trapezoidal` and `jerk_limited`: one problem's phases (`_one`) into the pieces kernel,
+    or the general way when the inputs are not one problem."""
+    one = _one(order, q0, qf, vmax, amax, jmax, sync)
+    if one is None:                             # the general way, and its messages
+        return profile_trajectory(_profile(order, *_single(q0, qf), vmax, amax, jmax, sync),
+                                  label)
+    return _trajectory(order, one.times, one.values, one.q0, label)
+
+
+_NUMBER = np.empty(0)       # a limit's "no value per joint": the timing kernel takes its number
+_FLOAT = np.dtype(float)    # NumPy converts a dtype given as an instance faster than as a type
+
+
+def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
+         jmax: ArrayLike, sync: str) -> Profile | None:
+    """One problem through the timing kernel with as few steps in Python as it takes: q0, qf
+    (n,) copied to fresh float arrays (the `Profile` keeps them), each limit a float passed as
+    a number or an array (n,) or (1,) passed as it is (copied only if read-only). None for
+    inputs of other kinds or shapes, which take the general way (`_profile`)."""
+    if sync != "time" and sync != "phase":
+        raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
+    if type(q0) is np.ndarray and q0.ndim != 1:
+        return None                             # a batch: no copy to find that out
     try:
-        stacked[0, 0] = q0
-        stacked[1, 0] = qf
-        stacked[2, 0] = vmax
-        stacked[3, 0] = amax
-        stacked[4, 0] = jmax
+        q0, qf = np.array(q0, dtype=_FLOAT), np.array(qf, dtype=_FLOAT)
+        # A float as the kernel's number, anything else as an array (a number: shape (1,)).
+        V, v = ((_NUMBER, vmax) if type(vmax) is float
+                else (np.ascontiguousarray(vmax, dtype=_FLOAT), 0.0))
+        A, a = ((_NUMBER, amax) if type(amax) is float
+                else (np.ascontiguousarray(amax, dtype=_FLOAT), 0.0))
+        J, j = ((_NUMBER, jmax) if type(jmax) is float
+                else (np.ascontiguousarray(jmax, dtype=_FLOAT), 0.0))
     except (TypeError, ValueError):
-        return None                             # a limit of another shape: the general way
-    return stacked
+        return None
+    if not q0.ndim == qf.ndim == V.ndim == A.ndim == J.ndim == 1:
+        return None
+    if not (V.flags.writeable and A.flags.writeable and J.flags.writeable):
+        # Read-only limits (a Robot's): numba types them apart from writable arrays and would
+        # compile the kernel again for every mix of the two.
+        V, A, J = (x if x.flags.writeable else x.copy() for x in (V, A, J))
+    n, K = len(q0), 3 if order == 2 else 7
+    times, values = np.empty((n, K + 1)), np.empty((n, K))
+    bad = _kernels.profile_timing.light(order, n, q0, qf, V, A, J, v, a, j, sync == "phase",
+                                        times, values)
+    if bad:
+        if bad == 5:                            # the lengths are not one problem's
+            return None
+        _refuse(bad, order, (vmax, amax, jmax))
+    return Profile(times[0, -1], times, values, order, q0, qf)
 
 
 def _problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
@@ -221,6 +268,8 @@ def _problem(q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
                          f"(..., n), found {[np.shape(x) for x in raw[:4]]}") from None
     if not shape:
         raise InputError("q0, qf: expected shape (..., n), found scalars")
+    if not shape[-1]:
+        raise InputError(f"q0, qf: expected shape (..., n) with n >= 1 joints, found {shape}")
     return stacked
 
 
@@ -234,36 +283,28 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
 
 def _profile(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
              jmax: ArrayLike, sync: str) -> Profile:
-    """Run the timing kernel on the problems (a trapezoid's jmax is 1.0, unused). One problem
-    is a batch of one, with as few steps in Python around the kernel as it takes."""
+    """Run the timing kernel on the problems (a trapezoid's jmax is 1.0, unused), stacked and
+    broadcast first: a batch, or one problem that `_one` did not take."""
     if sync != "time" and sync != "phase":
         raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
-    K = 3 if order == 2 else 7
-    one = _one_problem(q0, qf, vmax, amax, jmax)
-    if one is not None:
-        n = one.shape[2]
-        times, values = np.empty((1, n, K + 1)), np.empty((1, n, K))
-        bad = _kernels.profile_timing.light(order, one, sync == "phase", times, values)
-        if bad:
-            _refuse(bad, order, one)
-        times = times[0]
-        return Profile(times[0, -1], times, values[0], order, one[0, 0], one[1, 0])
     arrays = _problem(q0, qf, vmax, amax, jmax)
     lead, n = arrays.shape[1:], arrays.shape[-1]
+    K = 3 if order == 2 else 7
     times, values = np.empty(lead + (K + 1,)), np.empty(lead + (K,))
-    bad = _kernels.profile_timing.sized(arrays[0].size, order, arrays.reshape(5, -1, n),
-                                        sync == "phase", times.reshape(-1, n, K + 1),
-                                        values.reshape(-1, n, K))
+    flat = arrays.reshape(5, -1)
+    bad = _kernels.profile_timing.sized(flat[0].size, order, n, flat[0], flat[1], flat[2],
+                                        flat[3], flat[4], 0.0, 0.0, 0.0, sync == "phase",
+                                        times.reshape(-1, K + 1), values.reshape(-1, K))
     if bad:
-        _refuse(bad, order, arrays)
+        _refuse(bad, order, (vmax, amax, jmax))
     return Profile(times[..., 0, -1].copy(), times, values, order, arrays[0], arrays[1])
 
 
-def _refuse(bad: int, order: int, arrays: NDArray) -> None:
+def _refuse(bad: int, order: int, limits: tuple[ArrayLike, ArrayLike, ArrayLike]) -> None:
     """Raise for the kernel's first bad input (1 q0 or qf, 2 vmax, 3 amax, 4 jmax)."""
     if bad == 1:
         raise InputError("q0, qf: expected finite joint values, found NaN or inf")
     name = ("vmax", "amax", "jmax")[bad - 2]
     finite = "" if name == "vmax" or (name == "amax" and order == 3) else " finite"
     raise InputError(f"{name}: expected positive{finite} limits, found "
-                     f"{np.unique(arrays[bad]).tolist()}")
+                     f"{np.unique(np.asarray(limits[bad - 2], dtype=float)).tolist()}")
