@@ -52,6 +52,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 import armkit
+from armkit.jit import set_mode
 from armkit.calibration.handeye import handeye
 from armkit.calibration.identify import (calibrate, evaluate, identifiability,
                                          identified_robot, parametric_model, select_poses)
@@ -423,6 +424,7 @@ def _trial(robot, n, chosen, every, rng):
 
 
 def main():
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="20 hand-eye trials per cell")
     args = parser.parse_args()

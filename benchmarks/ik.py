@@ -41,6 +41,7 @@ from ikpy.chain import Chain as IkpyChain
 from ikpy.link import OriginLink, URDFLink
 
 import armkit
+from armkit.jit import set_mode
 from armkit.kinematics.ik import IKSolver, ik
 from armkit.kinematics.ik.task import as_mask, task_errors
 from armkit.spatial import matrix_to_rpy
@@ -194,6 +195,7 @@ def single(rounds: int) -> None:
 
 
 def main() -> None:
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="200 targets, 2 rounds")
     parser.add_argument("--solutions", action="store_true",

@@ -27,6 +27,7 @@ import numpy as np
 from sklearn.cluster import DBSCAN
 
 import armkit.perception.target as target_module
+from armkit.jit import set_mode
 from armkit.perception import dbscan, detect_target, random_scene, ransac_plane
 
 N_POINTS, RADIUS = 100_000, 0.04
@@ -166,6 +167,7 @@ def numba_check(repeat: int) -> None:
 
 
 def main() -> None:
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()

@@ -38,6 +38,7 @@ import toppra.algorithm
 import toppra.constraint
 from scipy.interpolate import CubicSpline, make_interp_spline
 
+from armkit.jit import set_mode
 from armkit.trajectory import jerk_limited, jerk_limited_profile, retime, spline, waypoint_path
 from armkit.trajectory.splines import _System
 from common import Spread, interleaved, load, ratio
@@ -217,6 +218,7 @@ def retiming(rng, repeat: int) -> None:
 
 
 def main() -> None:
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats, 1e5 samples")
     parser.add_argument("--profiles", action="store_true", help="only the profiles (case 3)")

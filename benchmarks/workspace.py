@@ -29,6 +29,7 @@ import numpy as np
 from distributed import Client, LocalCluster
 
 import armkit
+from armkit.jit import set_mode
 from armkit.sampled_workspace import CHUNK
 from common import interleaved, load, numpy_chain, ratio
 
@@ -72,6 +73,7 @@ def worker_peaks_mb(client: Client) -> list[float]:
 
 
 def main() -> None:
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="n = 1e6 only")
     parser.add_argument("--big", action="store_true", help="also n = 1e8 (a minute or two)")
