@@ -166,3 +166,23 @@ def test_checker_bad_input():
         CollisionChecker(robot, Scene(), ArmGeometry([9], [[0, 0, 0]], [[0, 0, 0]], [0.1]))
     with pytest.raises(InputError, match="expected last axis 6"):
         CollisionChecker(robot).valid([0, 0, 0])
+
+
+def test_kernel_sine_cosine_within_two_ulp_of_libm():
+    """The checker's inlined sine and cosine (range reduction and polynomials) against the C
+    library's, at angles near the reduction's quadrant edges, small, large and huge."""
+    import math
+
+    from armkit.planning.collision import sin_cos
+
+    rng = np.random.default_rng(4)
+    edges = np.arange(-40, 41) * (np.pi / 4)
+    x = np.concatenate([rng.uniform(-7, 7, 3000), rng.uniform(-1e5, 1e5, 500),
+                        edges, np.nextafter(edges, 0), np.nextafter(edges, 9),
+                        [0.0, -0.0, 1e-300, 5e-9, 1e6, -3e7, 1e300]])
+    for v in x:
+        s, c = sin_cos(v)
+        ls, lc = math.sin(v), math.cos(v)
+        assert abs(s - ls) <= 2 * np.spacing(abs(ls)) and abs(c - lc) <= 2 * np.spacing(abs(lc))
+    s, c = sin_cos(np.inf)
+    assert math.isnan(s) and math.isnan(c)
