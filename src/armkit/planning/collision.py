@@ -271,9 +271,10 @@ def sin_cos(x):
 # kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
 # frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
 # centres (o, 3), bounding radii (o), the moving joints' mimic scales (n), then the obstacles'
-# world bounding boxes' half sizes (o, 3) about their centres, the capsules' bounding-ball radii
-# (m). Work W: segments (m, 6), p, d and the sort scratch (14),
-# the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n).
+# world bounding boxes (o, 6: lower corner, upper corner), the capsules' bounding-ball radii
+# (m), the box of the whole scene (6). Work W: segments (m, 6), p, d and the sort scratch (14),
+# the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n), the
+# capsules' world bounding boxes (m, 6).
 
 @_inline
 def weights_at(I):
@@ -285,7 +286,7 @@ def weights_at(I):
 @_inline
 def work_array(I):
     """The kernels' work array W."""
-    W = np.empty(10 * I[1] + 15 + I[0])
+    W = np.empty(16 * I[1] + 15 + I[0])
     W[10 * I[1] + 14] = -1.0              # no closest pair yet
     return W
 
@@ -333,10 +334,12 @@ def free_distance(q, base, F, I, W, floor, cap):
     f_cen = f_dims + 3 * nobs
     f_bound = f_cen + 3 * nobs
     f_scale = f_bound + nobs
-    f_half = f_scale + n
-    f_ball = f_half + 3 * nobs
+    f_box = f_scale + n
+    f_ball = f_box + 6 * nobs
+    f_union = f_ball + m
     w_p = 6 * m
     w_b = w_p + 14
+    w_box = w_b + 4 * m + 1 + n
     # The capsules' world segments into W[6k : 6k + 6], capsules sorted by body (-1: fixed).
     k = 0
     while k < m and I[i_body + k] < 0:
@@ -371,24 +374,40 @@ def free_distance(q, base, F, I, W, floor, cap):
             r00, r01, r02, r03 = _times_link(r00, r01, r02, r03, F, lk)
             r10, r11, r12, r13 = _times_link(r10, r11, r12, r13, F, lk)
             r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
-    # Each capsule's bounding ball: centre and radius (half its length plus its radius, fixed)
-    # into W[w_b + 4k : w_b + 4k + 4].
+    # Each capsule's bounding ball (centre, radius: half its length plus its radius, fixed) into
+    # W[w_b + 4k : w_b + 4k + 4], its world bounding box (lower corner, upper corner, the radius
+    # included) into W[w_box + 6k : w_box + 6k + 6].
     for k in range(m):
-        x, y, z = W[6 * k + 3] - W[6 * k], W[6 * k + 4] - W[6 * k + 1], W[6 * k + 5] - W[6 * k + 2]
-        W[w_b + 4 * k] = W[6 * k] + 0.5 * x
-        W[w_b + 4 * k + 1] = W[6 * k + 1] + 0.5 * y
-        W[w_b + 4 * k + 2] = W[6 * k + 2] + 0.5 * z
+        ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
+        bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
+        W[w_b + 4 * k] = ax + 0.5 * (bx - ax)
+        W[w_b + 4 * k + 1] = ay + 0.5 * (by - ay)
+        W[w_b + 4 * k + 2] = az + 0.5 * (bz - az)
         W[w_b + 4 * k + 3] = F[f_ball + k]
+        radius = F[f_rad + k]
+        W[w_box + 6 * k] = min(ax, bx) - radius
+        W[w_box + 6 * k + 1] = min(ay, by) - radius
+        W[w_box + 6 * k + 2] = min(az, bz) - radius
+        W[w_box + 6 * k + 3] = max(ax, bx) + radius
+        W[w_box + 6 * k + 4] = max(ay, by) + radius
+        W[w_box + 6 * k + 5] = max(az, bz) + radius
     best = cap
     for s in range(npairs):
         ci, cj = I[i_pairs + 2 * s], I[i_pairs + 2 * s + 1]
-        i, j = 6 * ci, 6 * cj
-        # Bounding balls at least 2 best apart: this pair cannot lower best.
+        # Bounding boxes, then bounding balls, at least 2 best apart: this pair cannot lower
+        # best (its gap is half the distance less the radii).
+        i, j = w_box + 6 * ci, w_box + 6 * cj
+        x = max(W[i] - W[j + 3], W[j] - W[i + 3])
+        y = max(W[i + 1] - W[j + 4], W[j + 1] - W[i + 4])
+        z = max(W[i + 2] - W[j + 5], W[j + 2] - W[i + 5])
+        if max(x, max(y, z)) >= 2.0 * best:
+            continue
         bi, bj = w_b + 4 * ci, w_b + 4 * cj
         x, y, z = W[bi] - W[bj], W[bi + 1] - W[bj + 1], W[bi + 2] - W[bj + 2]
         reach = 2.0 * best + W[bi + 3] + W[bj + 3]
         if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
             continue
+        i, j = 6 * ci, 6 * cj
         gap = 0.5 * (_segment_segment(W[i], W[i + 1], W[i + 2], W[i + 3], W[i + 4], W[i + 5],
                                       W[j], W[j + 1], W[j + 2], W[j + 3], W[j + 4], W[j + 5])
                      - F[f_rad + ci] - F[f_rad + cj])
@@ -397,56 +416,66 @@ def free_distance(q, base, F, I, W, floor, cap):
             if best <= floor:
                 return best
     # Capsule-obstacle pairs, the closest pair of the previous call first (consecutive states
-    # on an edge are alike: a small best early lets the bounds skip most other pairs).
+    # on an edge are alike: a small best early lets the bounds skip most other pairs), then
+    # capsule by capsule, a capsule whose box is at least best from the scene's box skipping
+    # every obstacle.
     witness = int(W[w_b + 4 * m])
-    next_k, next_o = 0, -1                  # pair step - 1 as (capsule, obstacle): no division
-    for step in range(m * nobs + 1):
-        if step == 0:
+    for row in range(-1, m):
+        if row < 0:
             if witness < 0 or witness >= m * nobs:
                 continue
-            pair = witness
-            k, o = pair // nobs, pair % nobs
+            k = witness // nobs
+            first = witness - k * nobs
+            last = first + 1
         else:
-            next_o += 1
-            if next_o == nobs:
-                next_k, next_o = next_k + 1, 0
-            pair = step - 1
-            if pair == witness:
+            k, first, last = row, 0, nobs
+        kb = w_box + 6 * k
+        lx, ly, lz = W[kb], W[kb + 1], W[kb + 2]
+        hx, hy, hz = W[kb + 3], W[kb + 4], W[kb + 5]
+        if row >= 0:
+            x = max(lx - F[f_union + 3], F[f_union] - hx)
+            y = max(ly - F[f_union + 4], F[f_union + 1] - hy)
+            z = max(lz - F[f_union + 5], F[f_union + 2] - hz)
+            if max(x, max(y, z)) >= best:
                 continue
-            k, o = next_k, next_o
         ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
         bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
         radius = F[f_rad + k]
-        # World bounding boxes of capsule and obstacle at least best apart along an axis:
-        # skip (no transform to the obstacle's frame).
-        c, e = f_cen + 3 * o, f_half + 3 * o
-        x = max(min(ax, bx) - F[c] - F[e], F[c] - F[e] - max(ax, bx))
-        y = max(min(ay, by) - F[c + 1] - F[e + 1], F[c + 1] - F[e + 1] - max(ay, by))
-        z = max(min(az, bz) - F[c + 2] - F[e + 2], F[c + 2] - F[e + 2] - max(az, bz))
-        if max(x, max(y, z)) - radius >= best:
-            continue
-        # Bounding balls of capsule and obstacle at least best apart: skip.
         bk = w_b + 4 * k
-        x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
-        reach = best + W[bk + 3] + F[f_bound + o]
-        if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
-            continue
-        _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
-        kind, h = I[i_okind + o], f_dims + 3 * o
-        if kind == 0:
-            apart = 0.0
-            for r in range(3):
-                e = W[w_p + r] + W[w_p + 3 + r]
-                apart = max(apart, min(W[w_p + r], e) - F[h + r],
-                            -F[h + r] - max(W[w_p + r], e))
-            if apart - radius >= best:
+        for o in range(first, last):
+            pair = k * nobs + o
+            if row >= 0 and pair == witness:
                 continue
-        gap = _local_distance(kind, F, h, W, w_p) - radius
-        if gap < best:
-            best = gap
-            W[w_b + 4 * m] = pair
-            if best <= floor:
-                return best
+            # World bounding boxes of capsule and obstacle at least best apart along an axis:
+            # skip (no transform to the obstacle's frame).
+            ob = f_box + 6 * o
+            x = max(lx - F[ob + 3], F[ob] - hx)
+            y = max(ly - F[ob + 4], F[ob + 1] - hy)
+            z = max(lz - F[ob + 5], F[ob + 2] - hz)
+            if max(x, max(y, z)) >= best:
+                continue
+            # Bounding balls of capsule and obstacle at least best apart: skip.
+            c = f_cen + 3 * o
+            x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
+            reach = best + W[bk + 3] + F[f_bound + o]
+            if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
+                continue
+            _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
+            kind, h = I[i_okind + o], f_dims + 3 * o
+            if kind == 0:
+                apart = 0.0
+                for r in range(3):
+                    e = W[w_p + r] + W[w_p + 3 + r]
+                    apart = max(apart, min(W[w_p + r], e) - F[h + r],
+                                -F[h + r] - max(W[w_p + r], e))
+                if apart - radius >= best:
+                    continue
+            gap = _local_distance(kind, F, h, W, w_p) - radius
+            if gap < best:
+                best = gap
+                W[w_b + 4 * m] = pair
+                if best <= floor:
+                    return best
     return best
 
 
@@ -642,15 +671,19 @@ def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
     """The checker's arrays as one float array F and one int array I, in the order
     `free_distance` reads them; I ends with the length of a state (`state_size`)."""
     n, m, npairs, nobs = len(chain.kinds), len(body), len(pairs), len(scene.kind)
+    half = world_half_sizes(scene)
+    boxes = np.hstack([scene.center - half, scene.center + half]).reshape(nobs, 6)
     I = np.concatenate([[n, m, npairs, nobs], chain.kinds, body, np.reshape(pairs, -1),
                         scene.kind, chain.source, [len(weights)]]).astype(np.int64)
     F = np.concatenate([chain.offsets, np.reshape(chain.pre[:3], -1),
                         np.reshape(chain.links[:, :3], -1), np.reshape(ca, -1),
                         np.reshape(cb, -1), radius, weights, np.reshape(scene.inverse, -1),
                         np.reshape(scene.dims, -1), np.reshape(scene.center, -1), scene.bound,
-                        chain.scale, np.reshape(world_half_sizes(scene), -1),
+                        chain.scale, np.reshape(boxes, -1),
                         0.5 * np.linalg.norm(np.reshape(cb, (-1, 3)) - np.reshape(ca, (-1, 3)),
-                                             axis=1) + radius + 1e-12]).astype(float)
+                                             axis=1) + radius + 1e-12,
+                        boxes[:, :3].min(axis=0, initial=np.inf),
+                        boxes[:, 3:].max(axis=0, initial=-np.inf)]).astype(float)
     return F, I
 
 
