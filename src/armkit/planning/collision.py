@@ -268,13 +268,14 @@ def sin_cos(x):
 # --- the model: one float array F and one int array I (few arguments cross numba's dispatcher) -
 #
 # I: n, m (capsules), pairs, obstacles, then kinds (n), body (m), pairs (2 per pair), obstacle
-# kinds. F: offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body
-# frame, radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3),
-# centres (o, 3), bounding radii (o), the moving joints' mimic scales (n), then the obstacles'
-# world bounding boxes (o, 6: lower corner, upper corner), the capsules' bounding-ball radii
-# (m), the box of the whole scene (6). Work W: segments (m, 6), p, d and the sort scratch (14),
-# the capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n), the
-# capsules' world bounding boxes (m, 6).
+# kinds, the joint values' sources (n), the links' DH-form flags (n), the state's size. F:
+# offsets (n), pre (3, 4), links (n, 3, 4), capsule ends a, b (m, 3) each in its body frame,
+# radius (m), displacement weights (n), obstacle inverses (o, 3, 4), dims (o, 3), centres
+# (o, 3), bounding radii (o), the moving joints' mimic scales (n), then the obstacles' world
+# bounding boxes (o, 6: lower corner, upper corner), the capsules' bounding-ball radii (m), the
+# box of the whole scene (6). Work W: segments (m, 6), p, d and the sort scratch (14), the
+# capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n), the capsules'
+# world bounding boxes (m, 6).
 
 @_inline
 def weights_at(I):
@@ -325,6 +326,7 @@ def free_distance(q, base, F, I, W, floor, cap):
     i_pairs = i_body + m
     i_okind = i_pairs + 2 * npairs
     i_source = i_okind + nobs
+    i_dh = i_source + n
     f_links = n + 12
     f_ca = f_links + 12 * n
     f_cb = f_ca + 3 * m
@@ -371,9 +373,21 @@ def free_distance(q, base, F, I, W, floor, cap):
             k += 1
         if i + 1 < n:
             lk = f_links + 12 * i
-            r00, r01, r02, r03 = _times_link(r00, r01, r02, r03, F, lk)
-            r10, r11, r12, r13 = _times_link(r10, r11, r12, r13, F, lk)
-            r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
+            if I[i_dh + i]:                     # a DH link: Tz(d) Tx(a) Rx(alpha)
+                ta, td = F[lk + 3], F[lk + 11]
+                r03 += r00 * ta + r02 * td
+                r13 += r10 * ta + r12 * td
+                r23 += r20 * ta + r22 * td
+                sa = F[lk + 9]
+                if sa != 0.0:
+                    ca = F[lk + 5]
+                    r01, r02 = r01 * ca + r02 * sa, r02 * ca - r01 * sa
+                    r11, r12 = r11 * ca + r12 * sa, r12 * ca - r11 * sa
+                    r21, r22 = r21 * ca + r22 * sa, r22 * ca - r21 * sa
+            else:
+                r00, r01, r02, r03 = _times_link(r00, r01, r02, r03, F, lk)
+                r10, r11, r12, r13 = _times_link(r10, r11, r12, r13, F, lk)
+                r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
     # Each capsule's bounding ball (centre, radius: half its length plus its radius, fixed) into
     # W[w_b + 4k : w_b + 4k + 4], its world bounding box (lower corner, upper corner, the radius
     # included) into W[w_box + 6k : w_box + 6k + 6].
@@ -666,6 +680,17 @@ def world_half_sizes(scene: SceneKernel) -> NDArray:
     return np.einsum("oij,oj->oi", np.abs(rotation), local)
 
 
+def dh_links(chain: KernelChain) -> NDArray:
+    """1 where a link transform (after each moving joint) has a DH link's form, Tz(d) Tx(a)
+    Rx(alpha): ``[[1, 0, 0, a], [0, c, -s, 0], [0, s, c, d]]``, whose product with a frame the
+    checker takes in 6 to 18 multiplications instead of 36; else 0. (n,) int."""
+    L = chain.links[:, :3]
+    dh = ((L[:, 0, 0] == 1) & (L[:, 0, 1] == 0) & (L[:, 0, 2] == 0) & (L[:, 1, 0] == 0)
+          & (L[:, 2, 0] == 0) & (L[:, 1, 3] == 0) & (L[:, 1, 1] == L[:, 2, 2])
+          & (L[:, 1, 2] == -L[:, 2, 1]))
+    return dh.astype(np.int64)
+
+
 def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
                scene: SceneKernel) -> tuple[NDArray, NDArray]:
     """The checker's arrays as one float array F and one int array I, in the order
@@ -674,7 +699,8 @@ def pack_model(chain: KernelChain, body, ca, cb, radius, pairs, weights,
     half = world_half_sizes(scene)
     boxes = np.hstack([scene.center - half, scene.center + half]).reshape(nobs, 6)
     I = np.concatenate([[n, m, npairs, nobs], chain.kinds, body, np.reshape(pairs, -1),
-                        scene.kind, chain.source, [len(weights)]]).astype(np.int64)
+                        scene.kind, chain.source, dh_links(chain),
+                        [len(weights)]]).astype(np.int64)
     F = np.concatenate([chain.offsets, np.reshape(chain.pre[:3], -1),
                         np.reshape(chain.links[:, :3], -1), np.reshape(ca, -1),
                         np.reshape(cb, -1), radius, weights, np.reshape(scene.inverse, -1),
