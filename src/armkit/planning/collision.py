@@ -32,6 +32,7 @@ from armkit.model.chain import KernelChain
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.geometry import ArmGeometry, arm_geometry, link_to_body
 from armkit.planning.scene import BOX, CAPSULE, SPHERE, Scene, SceneKernel, scene_kernel
+from armkit.threads import threads_for
 
 _jit = numba.njit(cache=True, nogil=True)
 # Helpers with one call site are inlined in numba's IR (a jitted callee's code is optimised
@@ -559,15 +560,17 @@ def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
         tail = tail + 1 if tail + 1 < size else 0
 
 
-@_jit
-def states_kernel(Q, F, I, floor, cap, out):
-    """`free_distance` (with floor and cap) of the states Q, flat (k * n,), into out (k,), or
-    with out empty (0,) only returned (one state, nothing written); NaN for a state with a
-    value that is not finite. Returns the last state's."""
+BATCH_CHUNK = 1024          # states per task of a batch, each with a fresh work array
+PARALLEL_FROM = 4096        # states worth starting a thread for (`armkit.threads.threads_for`)
+
+
+@_inline
+def _states_span(Q, F, I, floor, cap, out, start, stop):
+    """`states_kernel` for the states start .. stop - 1, with a work array of its own."""
     W = work_array(I)
     n = state_size(I)
     f = np.nan
-    for s in range(Q.shape[0] // n):
+    for s in range(start, stop):
         finite = True
         for j in range(s * n, (s + 1) * n):
             if not math.isfinite(Q[j]):
@@ -576,6 +579,46 @@ def states_kernel(Q, F, I, floor, cap, out):
         if out.shape[0]:
             out[s] = f
     return f
+
+
+@_jit
+def states_kernel(Q, F, I, floor, cap, out):
+    """`free_distance` (with floor and cap) of the states Q, flat (k * n,), into out (k,), or
+    with out empty (0,) only returned (one state, nothing written); NaN for a state with a
+    value that is not finite. Returns the last state's. The states go in chunks of
+    BATCH_CHUNK, each starting afresh (no closest pair carried over), as in `states_parallel`:
+    both give the same values."""
+    count = Q.shape[0] // state_size(I)
+    f = np.nan
+    for start in range(0, count, BATCH_CHUNK):
+        f = _states_span(Q, F, I, floor, cap, out, start, min(count, start + BATCH_CHUNK))
+    return f
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def states_parallel(Q, F, I, floor, cap, out):
+    """`states_kernel` into out (k,), its chunks spread over numba's threads (compiled at the
+    first large batch only)."""
+    count = Q.shape[0] // state_size(I)
+    for c in numba.prange((count + BATCH_CHUNK - 1) // BATCH_CHUNK):
+        _states_span(Q, F, I, floor, cap, out, c * BATCH_CHUNK,
+                     min(count, (c + 1) * BATCH_CHUNK))
+
+
+def states_batch(Q: NDArray, F: NDArray, I: NDArray, floor: float, cap: float,
+                 out: NDArray) -> None:
+    """`states_kernel` of the states Q, flat (k * n,), into out (k,): serial, or on as many
+    threads as the batch's size and the idle cores are worth (`armkit.threads.threads_for`)."""
+    threads = threads_for(out.shape[0], PARALLEL_FROM)
+    if threads == 1:
+        states_kernel(Q, F, I, floor, cap, out)
+        return
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))   # this thread only
+    try:
+        states_parallel(Q, F, I, floor, cap, out)
+    finally:
+        numba.set_num_threads(before)
 
 
 @_jit
@@ -821,7 +864,7 @@ class CollisionChecker:
             joint_array(self.robot, q)                          # raises the precise error
         q = _writable(q)
         out = np.empty(q.shape[:-1])
-        states_kernel(q.reshape(-1), F, I, floor, cap, out.reshape(-1))
+        states_batch(q.reshape(-1), F, I, floor, cap, out.reshape(-1))
         if np.isnan(out).any():
             raise InputError("q: expected finite joint values, found NaN or inf")
         return out
@@ -860,8 +903,8 @@ class CollisionChecker:
         """`valid` for states (k, n) already checked for shape (the planners' call)."""
         Q = _writable(Q)
         out = np.empty(Q.shape[0])
-        states_kernel(Q.reshape(-1), self.model[0], self.model[1], self.resolution,
-                      self._valid_cap, out)
+        states_batch(Q.reshape(-1), self.model[0], self.model[1], self.resolution,
+                     self._valid_cap, out)
         return out > self.resolution
 
     def polyline_free(self, path: NDArray) -> tuple[bool, int]:
