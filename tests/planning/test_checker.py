@@ -186,3 +186,17 @@ def test_kernel_sine_cosine_within_two_ulp_of_libm():
         assert abs(s - ls) <= 2 * np.spacing(abs(ls)) and abs(c - lc) <= 2 * np.spacing(abs(lc))
     s, c = sin_cos(np.inf)
     assert math.isnan(s) and math.isnan(c)
+
+
+def test_joint_angles_beyond_the_reduction_range_match_the_reduced_ones():
+    """Angles whose sines the kernel leaves to libm (|v| >= 1e5 rad) give the clearance of the
+    same angles taken modulo 2 pi, in a batch and one state at a time."""
+    robot = armkit.robot("inspection_6dof")
+    checker = CollisionChecker(robot, shelf(), default_geometry(robot, 0.04))
+    Q = random_q(robot, 50, seed=9)
+    turns = np.zeros_like(Q)
+    turns[:, ::2] = 2 * np.pi * 20_000                      # 1.26e5 rad on three joints
+    far = Q + turns
+    np.testing.assert_allclose(checker.clearance(far), checker.clearance(Q), atol=1e-9)
+    np.testing.assert_allclose([checker.clearance(q) for q in far], checker.clearance(Q),
+                               atol=1e-9)

@@ -233,10 +233,10 @@ _REDUCED_BELOW = 1e5
 
 
 @_inline
-def sin_cos(x):
-    """(sin x, cos x) within 1 ulp."""
-    if not abs(x) < _REDUCED_BELOW:
-        return math.sin(x), math.cos(x)
+def _sin_cos_reduced(x):
+    """(sin x, cos x) within 1 ulp for |x| < _REDUCED_BELOW (else those of 0), without a
+    branch: a loop of these vectorises."""
+    x = x if abs(x) < _REDUCED_BELOW else 0.0
     fn = (x * _INVPIO2 + _TO_INT) - _TO_INT
     t = x - fn * _PIO2_1
     w = fn * _PIO2_2
@@ -258,12 +258,38 @@ def sin_cos(x):
     half = 0.5 * z
     u = 1.0 - half
     c = u + (((1.0 - u) - half) + (z * pc - y * tail))
-    quadrant = int(fn) & 3
-    if quadrant & 1:
-        s, c = c, -s
-    if quadrant & 2:
-        s, c = -s, -c
-    return s, c
+    quadrant = int(fn)
+    odd = (quadrant & 1) != 0
+    return ((c if odd else s) * float(1 - (quadrant & 2)),
+            (s if odd else c) * float(1 - ((quadrant + 1) & 2)))
+
+
+@_jit
+def sin_cos(x):
+    """(sin x, cos x) within 1 ulp, any x (libm's beyond the reduction's range)."""
+    if not abs(x) < _REDUCED_BELOW:
+        return math.sin(x), math.cos(x)
+    return _sin_cos_reduced(x)
+
+
+@_inline
+def joint_trig(Q, base, count, F, I, T, at):
+    """The moving joints' values v (from the states Q[base : base + count * ns], ns the state's
+    size) into T[at : at + count * n], their sines and cosines into the next count * n and the
+    count * n after (n moving joints): for `free_distance`. One loop over the angles that
+    vectorises, then libm for the rare ones beyond the reduction's range."""
+    n, ns = I[0], state_size(I)
+    i_source = 4 + n + I[1] + 2 * I[2] + I[3]
+    f_scale = n + 12 + 12 * n + 7 * I[1] + ns + 19 * I[3]
+    for s in range(count):
+        for i in range(n):
+            T[at + s * n + i] = F[f_scale + i] * Q[base + s * ns + I[i_source + i]] + F[i]
+    total = count * n
+    for c in range(at, at + total):
+        T[c + total], T[c + 2 * total] = _sin_cos_reduced(T[c])
+    for c in range(at, at + total):
+        if not abs(T[c]) < _REDUCED_BELOW:
+            T[c + total], T[c + 2 * total] = math.sin(T[c]), math.cos(T[c])
 
 
 # --- the model: one float array F and one int array I (few arguments cross numba's dispatcher) -
@@ -276,7 +302,7 @@ def sin_cos(x):
 # bounding boxes (o, 6: lower corner, upper corner), the capsules' bounding-ball radii (m), the
 # box of the whole scene (6). Work W: segments (m, 6), p, d and the sort scratch (14), the
 # capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n), the capsules'
-# world bounding boxes (m, 6).
+# world bounding boxes (m, 6), one state's joint values, sines and cosines (3n: `joint_trig`).
 
 @_inline
 def weights_at(I):
@@ -288,7 +314,7 @@ def weights_at(I):
 @_inline
 def work_array(I):
     """The kernels' work array W."""
-    W = np.empty(16 * I[1] + 15 + I[0])
+    W = np.empty(16 * I[1] + 15 + 4 * I[0])
     W[10 * I[1] + 14] = -1.0              # no closest pair yet
     return W
 
@@ -316,9 +342,10 @@ def _times_link(a, b, c, d, F, lk):
 
 
 @_jit
-def free_distance(q, base, F, I, W, floor, cap):
-    """How far (m) every point of the arm may move from the state q[base:base+n] without
-    contact: ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may
+def free_distance(T, at, stride, F, I, W, floor, cap):
+    """How far (m) every point of the arm may move from a state without contact, the state
+    given by its moving joints' values T[at : at + n], their sines T[at + stride ...] and
+    cosines T[at + 2 stride ...] (`joint_trig`): ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may
     move), returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
     within floor. Obstacles a cheap lower bound (bounding ball, then for a box the separation
     along its axes) puts beyond the best so far are skipped. F, I: the model; W: work."""
@@ -354,9 +381,9 @@ def free_distance(q, base, F, I, W, floor, cap):
     r10, r11, r12, r13 = F[n + 4], F[n + 5], F[n + 6], F[n + 7]
     r20, r21, r22, r23 = F[n + 8], F[n + 9], F[n + 10], F[n + 11]
     for i in range(n):
-        v = F[f_scale + i] * q[base + I[i_source + i]] + F[i]
+        v = T[at + i]
         if I[4 + i] == 0:
-            sn, cs = sin_cos(v)
+            sn, cs = T[at + stride + i], T[at + 2 * stride + i]
             r00, r01 = cs * r00 + sn * r01, cs * r01 - sn * r00
             r10, r11 = cs * r10 + sn * r11, cs * r11 - sn * r10
             r20, r21 = cs * r20 + sn * r21, cs * r21 - sn * r20
@@ -520,6 +547,7 @@ def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
     else:
         size = queue.shape[1]
     at = state_at(I)
+    trig = at + 6 * I[1] + I[0]                  # after q and the capsules' boxes
     head, tail, checked, stage = 0, 0, 0, 0
     a_t = b_t = a_f = b_f = fa = fb = 0.0
     if fa_known > floor:
@@ -541,7 +569,8 @@ def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
                 return True, checked, fb
         for j in range(n):
             W[at + j] = qa[j] + t * (qb[j] - qa[j])
-        f = free_distance(W, at, F, I, W, floor, cap)
+        joint_trig(W, at, 1, F, I, W, trig)
+        f = free_distance(W, trig, I[0], F, I, W, floor, cap)
         checked += 1
         stage += 1
         if f <= floor:
@@ -566,16 +595,19 @@ PARALLEL_FROM = 4096        # states worth starting a thread for (`armkit.thread
 
 @_inline
 def _states_span(Q, F, I, floor, cap, out, start, stop):
-    """`states_kernel` for the states start .. stop - 1, with a work array of its own."""
+    """`states_kernel` for the states start .. stop - 1, with work arrays of its own."""
     W = work_array(I)
-    n = state_size(I)
+    ns, count = state_size(I), stop - start
+    T = np.empty(3 * I[0] * count)
+    joint_trig(Q, start * ns, count, F, I, T, 0)
     f = np.nan
     for s in range(start, stop):
         finite = True
-        for j in range(s * n, (s + 1) * n):
+        for j in range(s * ns, (s + 1) * ns):
             if not math.isfinite(Q[j]):
                 finite = False
-        f = free_distance(Q, s * n, F, I, W, floor, cap) if finite else np.nan
+        f = free_distance(T, (s - start) * I[0], I[0] * count, F, I, W, floor,
+                          cap) if finite else np.nan
         if out.shape[0]:
             out[s] = f
     return f
