@@ -468,9 +468,9 @@ def free_distance(T, at, stride, F, I, W, floor, cap):
                 continue
             k = witness // nobs
             first = witness - k * nobs
-            last = first + 1
+            last, done = first + 1, -1
         else:
-            k, first, last = row, 0, nobs
+            k, first, last, done = row, 0, nobs, witness
         kb = w_box + 6 * k
         lx, ly, lz = W[kb], W[kb + 1], W[kb + 2]
         hx, hy, hz = W[kb + 3], W[kb + 4], W[kb + 5]
@@ -486,7 +486,7 @@ def free_distance(T, at, stride, F, I, W, floor, cap):
         bk = w_b + 4 * k
         for o in range(first, last):
             pair = k * nobs + o
-            if row >= 0 and pair == witness:
+            if pair == done:                    # the witness, already tried
                 continue
             # World bounding boxes of capsule and obstacle at least best apart along an axis:
             # skip (no transform to the obstacle's frame).
