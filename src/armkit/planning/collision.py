@@ -302,7 +302,7 @@ def joint_trig(Q, base, count, F, I, T, at):
 # bounding boxes (o, 6: lower corner, upper corner), the capsules' bounding-ball radii (m), the
 # box of the whole scene (6). Work W: segments (m, 6), p, d and the sort scratch (14), the
 # capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n), the capsules'
-# world bounding boxes (m, 6), one state's joint values, sines and cosines (3n: `joint_trig`).
+# world bounding boxes and their distances from the scene's box (m, 7), one state's joint values, sines and cosines (3n: `joint_trig`).
 
 @_inline
 def weights_at(I):
@@ -314,7 +314,7 @@ def weights_at(I):
 @_inline
 def work_array(I):
     """The kernels' work array W."""
-    W = np.empty(16 * I[1] + 15 + 4 * I[0])
+    W = np.empty(17 * I[1] + 15 + 4 * I[0])
     W[10 * I[1] + 14] = -1.0              # no closest pair yet
     return W
 
@@ -418,7 +418,7 @@ def free_distance(T, at, stride, F, I, W, floor, cap):
                 r20, r21, r22, r23 = _times_link(r20, r21, r22, r23, F, lk)
     # Each capsule's bounding ball (centre, radius: half its length plus its radius, fixed) into
     # W[w_b + 4k : w_b + 4k + 4], its world bounding box (lower corner, upper corner, the radius
-    # included) into W[w_box + 6k : w_box + 6k + 6].
+    # included) and the box's distance from the scene's box into W[w_box + 7k : w_box + 7k + 7].
     for k in range(m):
         ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
         bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
@@ -427,18 +427,20 @@ def free_distance(T, at, stride, F, I, W, floor, cap):
         W[w_b + 4 * k + 2] = az + 0.5 * (bz - az)
         W[w_b + 4 * k + 3] = F[f_ball + k]
         radius = F[f_rad + k]
-        W[w_box + 6 * k] = min(ax, bx) - radius
-        W[w_box + 6 * k + 1] = min(ay, by) - radius
-        W[w_box + 6 * k + 2] = min(az, bz) - radius
-        W[w_box + 6 * k + 3] = max(ax, bx) + radius
-        W[w_box + 6 * k + 4] = max(ay, by) + radius
-        W[w_box + 6 * k + 5] = max(az, bz) + radius
+        lx, ly, lz = min(ax, bx) - radius, min(ay, by) - radius, min(az, bz) - radius
+        hx, hy, hz = max(ax, bx) + radius, max(ay, by) + radius, max(az, bz) + radius
+        kb = w_box + 7 * k
+        W[kb], W[kb + 1], W[kb + 2], W[kb + 3], W[kb + 4], W[kb + 5] = lx, ly, lz, hx, hy, hz
+        # How far the box is from the scene's box (a lower bound on any obstacle's distance).
+        W[kb + 6] = max(max(lx - F[f_union + 3], F[f_union] - hx),
+                        max(max(ly - F[f_union + 4], F[f_union + 1] - hy),
+                            max(lz - F[f_union + 5], F[f_union + 2] - hz)))
     best = cap
     for s in range(npairs):
         ci, cj = I[i_pairs + 2 * s], I[i_pairs + 2 * s + 1]
         # Bounding boxes, then bounding balls, at least 2 best apart: this pair cannot lower
         # best (its gap is half the distance less the radii).
-        i, j = w_box + 6 * ci, w_box + 6 * cj
+        i, j = w_box + 7 * ci, w_box + 7 * cj
         x = max(W[i] - W[j + 3], W[j] - W[i + 3])
         y = max(W[i + 1] - W[j + 4], W[j + 1] - W[i + 4])
         z = max(W[i + 2] - W[j + 5], W[j + 2] - W[i + 5])
@@ -458,66 +460,61 @@ def free_distance(T, at, stride, F, I, W, floor, cap):
             if best <= floor:
                 return best
     # Capsule-obstacle pairs, the closest pair of the previous call first (consecutive states
-    # on an edge are alike: a small best early lets the bounds skip most other pairs), then
-    # capsule by capsule, a capsule whose box is at least best from the scene's box skipping
-    # every obstacle.
+    # on an edge are alike: a small best early lets the bounds skip most other pairs); a
+    # capsule whose box is at least best from the scene's box skips every obstacle.
     witness = int(W[w_b + 4 * m])
-    for row in range(-1, m):
-        if row < 0:
+    next_k, next_o = 0, -1                  # pair step - 1 as (capsule, obstacle): no division
+    for step in range(m * nobs + 1):
+        if step == 0:
             if witness < 0 or witness >= m * nobs:
                 continue
-            k = witness // nobs
-            first = witness - k * nobs
-            last, done = first + 1, -1
+            pair = witness
+            k = pair // nobs
+            o = pair - k * nobs
         else:
-            k, first, last, done = row, 0, nobs, witness
-        kb = w_box + 6 * k
-        lx, ly, lz = W[kb], W[kb + 1], W[kb + 2]
-        hx, hy, hz = W[kb + 3], W[kb + 4], W[kb + 5]
-        if row >= 0:
-            x = max(lx - F[f_union + 3], F[f_union] - hx)
-            y = max(ly - F[f_union + 4], F[f_union + 1] - hy)
-            z = max(lz - F[f_union + 5], F[f_union + 2] - hz)
-            if max(x, max(y, z)) >= best:
+            next_o += 1
+            if next_o == nobs:
+                next_k, next_o = next_k + 1, 0
+            pair = step - 1
+            if pair == witness:
                 continue
-        ax, ay, az = W[6 * k], W[6 * k + 1], W[6 * k + 2]
-        bx, by, bz = W[6 * k + 3], W[6 * k + 4], W[6 * k + 5]
-        radius = F[f_rad + k]
+            k, o = next_k, next_o
+        kb = w_box + 7 * k
+        if W[kb + 6] >= best:
+            continue
+        # World bounding boxes of capsule and obstacle at least best apart along an axis:
+        # skip (no transform to the obstacle's frame).
+        ob = f_box + 6 * o
+        x = max(W[kb] - F[ob + 3], F[ob] - W[kb + 3])
+        y = max(W[kb + 1] - F[ob + 4], F[ob + 1] - W[kb + 4])
+        z = max(W[kb + 2] - F[ob + 5], F[ob + 2] - W[kb + 5])
+        if max(x, max(y, z)) >= best:
+            continue
+        # Bounding balls of capsule and obstacle at least best apart: skip.
         bk = w_b + 4 * k
-        for o in range(first, last):
-            pair = k * nobs + o
-            if pair == done:                    # the witness, already tried
+        c = f_cen + 3 * o
+        x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
+        reach = best + W[bk + 3] + F[f_bound + o]
+        if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
+            continue
+        radius = F[f_rad + k]
+        _to_local(F, f_inv + 12 * o, W[6 * k], W[6 * k + 1], W[6 * k + 2], W[6 * k + 3],
+                  W[6 * k + 4], W[6 * k + 5], W, w_p)
+        kind, h = I[i_okind + o], f_dims + 3 * o
+        if kind == 0:
+            apart = 0.0
+            for r in range(3):
+                e = W[w_p + r] + W[w_p + 3 + r]
+                apart = max(apart, min(W[w_p + r], e) - F[h + r],
+                            -F[h + r] - max(W[w_p + r], e))
+            if apart - radius >= best:
                 continue
-            # World bounding boxes of capsule and obstacle at least best apart along an axis:
-            # skip (no transform to the obstacle's frame).
-            ob = f_box + 6 * o
-            x = max(lx - F[ob + 3], F[ob] - hx)
-            y = max(ly - F[ob + 4], F[ob + 1] - hy)
-            z = max(lz - F[ob + 5], F[ob + 2] - hz)
-            if max(x, max(y, z)) >= best:
-                continue
-            # Bounding balls of capsule and obstacle at least best apart: skip.
-            c = f_cen + 3 * o
-            x, y, z = W[bk] - F[c], W[bk + 1] - F[c + 1], W[bk + 2] - F[c + 2]
-            reach = best + W[bk + 3] + F[f_bound + o]
-            if reach > 0.0 and x * x + y * y + z * z >= reach * reach:
-                continue
-            _to_local(F, f_inv + 12 * o, ax, ay, az, bx, by, bz, W, w_p)
-            kind, h = I[i_okind + o], f_dims + 3 * o
-            if kind == 0:
-                apart = 0.0
-                for r in range(3):
-                    e = W[w_p + r] + W[w_p + 3 + r]
-                    apart = max(apart, min(W[w_p + r], e) - F[h + r],
-                                -F[h + r] - max(W[w_p + r], e))
-                if apart - radius >= best:
-                    continue
-            gap = _local_distance(kind, F, h, W, w_p) - radius
-            if gap < best:
-                best = gap
-                W[w_b + 4 * m] = pair
-                if best <= floor:
-                    return best
+        gap = _local_distance(kind, F, h, W, w_p) - radius
+        if gap < best:
+            best = gap
+            W[w_b + 4 * m] = pair
+            if best <= floor:
+                return best
     return best
 
 
@@ -547,7 +544,7 @@ def edge_free(qa, qb, F, I, W, floor, queue, fa_known):
     else:
         size = queue.shape[1]
     at = state_at(I)
-    trig = at + 6 * I[1] + I[0]                  # after q and the capsules' boxes
+    trig = at + 7 * I[1] + I[0]                  # after q and the capsules' boxes
     head, tail, checked, stage = 0, 0, 0, 0
     a_t = b_t = a_f = b_f = fa = fb = 0.0
     if fa_known > floor:
