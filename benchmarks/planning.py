@@ -4,6 +4,7 @@ and OMPL's planners (the `ompl` package) given a Python callback to the same che
     python benchmarks/planning.py            # 100 seeds per scene and planner
     python benchmarks/planning.py --quick    # 10 seeds, fewer checker rounds
     python benchmarks/planning.py --armkit-only    # without the OMPL rows
+    python benchmarks/planning.py --checker-only   # the checker's figures and first call only
 
 Scenes (inspection_6dof, one capsule per link between consecutive DH frame origins, 40 mm):
 - shelf: issue 15's shelf (three plates and a back wall), start in the lower compartment, goal
@@ -35,6 +36,7 @@ import time
 import numpy as np
 
 import armkit
+from armkit.jit import set_mode
 from armkit.planning import Box, CollisionChecker, Scene, default_geometry, plan
 from armkit.planning.collision import states_kernel
 
@@ -133,29 +135,35 @@ def mmm(x, scale=1.0, fmt="{:.3g}"):
     return "/".join(fmt.format(v) for v in (x.min(), np.median(x), x.max()))
 
 
-def first_call_compile() -> str:
+def first_call_compile(mode: str) -> str:
     """The checker's first call, then the first plan() on the shelf (RRT-Connect, shortcut),
-    in a fresh process with an empty numba cache, then with the cache filled: wall time and
-    this process's CPU time (the machine is shared)."""
-    code = ("import sys, time; import numpy as np, armkit; "
+    then the first batch of 20,000 states on every core (the parallel batch kernel), in a fresh
+    process with an empty numba cache, then with the cache filled: wall time and this
+    process's CPU time (the machine is shared). mode: `armkit.jit`'s ("auto": the first state
+    and plan run as Python; "compiled": what compiling them costs)."""
+    code = ("import os, sys, time; import numpy as np, armkit; "
             f"sys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r}); "
             "from planning import shelf, SHELF, R; "
             "from armkit.planning import CollisionChecker, default_geometry, plan; "
             "r=armkit.robot('inspection_6dof'); armkit.fk_frames(r, np.zeros((2, 6))); "
             "c=CollisionChecker(r, shelf(), default_geometry(r, 0.04), R); "
+            "Q=np.random.default_rng(0).uniform(r.lower, r.upper, (20000, 6)); "
             "t=time.perf_counter(); p=time.process_time(); c.valid(np.zeros(6)); "
             "t1=time.perf_counter(); p1=time.process_time(); plan(c, *SHELF, seed=0); "
-            "print(f'{t1-t:.2f} {p1-p:.2f} {time.perf_counter()-t1:.2f} "
-            "{time.process_time()-p1:.2f}')")
+            "t2=time.perf_counter(); p2=time.process_time(); "
+            "armkit.set_num_threads(os.cpu_count()); c.valid(Q); "
+            "print(f'{t1-t:.2f} {p1-p:.2f} {t2-t1:.2f} {p2-p1:.2f} "
+            "{time.perf_counter()-t2:.2f} {time.process_time()-p2:.2f}')")
     with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache, ARMKIT_JIT=mode)
         cold = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                               text=True).stdout.split()
         warm = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                               text=True).stdout.split()
-    return (f"empty numba cache: checker's first call {cold[0]} s wall, {cold[1]} s CPU; "
-            f"then the first plan() {cold[2]} s wall, {cold[3]} s CPU. From the cache: "
-            f"{warm[0]} s / {warm[1]} s and {warm[2]} s / {warm[3]} s")
+    return (f"ARMKIT_JIT={mode}, empty numba cache: checker's first call {cold[0]} s wall, {cold[1]} s CPU; "
+            f"then the first plan() {cold[2]} s wall, {cold[3]} s CPU; then the first batch "
+            f"on {os.cpu_count()} threads {cold[4]} s wall, {cold[5]} s CPU. From the cache: "
+            f"{warm[0]} s / {warm[1]} s, {warm[2]} s / {warm[3]} s and {warm[4]} s / {warm[5]} s")
 
 
 # --- checker throughput ------------------------------------------------------------------------
@@ -182,14 +190,34 @@ def checker_figures(checker, quick):
                       3) / len(single)
     t_numpy1 = rounds(lambda: [numpy_free_distance(robot, geometry, scene, q[None])
                                for q in single[:500]], 3) / 500
+    auto = armkit.get_num_threads()
+    public = rounds(lambda: checker.valid(Q), 3 if quick else 5)
+    cores = os.cpu_count()
+    armkit.set_num_threads(cores)
+    try:
+        checker.valid(Q[:20_000])
+        spread = rounds(lambda: checker.valid(Q), 3 if quick else 5)
+        spread_exact = rounds(lambda: checker.clearance(Q), 3 if quick else 5)
+    finally:
+        armkit.set_num_threads(None)
     print("\n## Checker: inspection_6dof capsules against the shelf, states per second "
           "(min/median/max over rounds)")
-    print(f"compiled batch, verdict at r = 5 mm : {mmm(len(Q) / batch, fmt='{:,.0f}')}")
-    print(f"compiled batch, exact free distance : {mmm(len(Q) / exact, fmt='{:,.0f}')}")
+    print(f"compiled batch, verdict at r = 5 mm : {mmm(len(Q) / batch, fmt='{:,.0f}')}"
+          "   (the kernel on one thread)")
+    print(f"compiled batch, exact free distance : {mmm(len(Q) / exact, fmt='{:,.0f}')}"
+          "   (the kernel on one thread)")
+    print(f"checker.valid(Q), armkit's threads  : {mmm(len(Q) / public, fmt='{:,.0f}')}"
+          f"   (armkit.get_num_threads() {auto} before the rounds)")
+    print(f"checker.valid(Q), {cores} threads         : {mmm(len(Q) / spread, fmt='{:,.0f}')}"
+          f"   (armkit.set_num_threads({cores}))")
+    print(f"checker.clearance(Q), {cores} threads     : "
+          f"{mmm(len(Q) / spread_exact, fmt='{:,.0f}')}")
     print(f"plain NumPy exact, batch            : {mmm(len(Qn) / numpy_batch, fmt='{:,.0f}')}"
           f"   (largest difference from compiled {agree:.1e} m)")
     print(f"ratio batch verdict / NumPy         : "
-          f"{np.median(len(Q) / batch) / np.median(len(Qn) / numpy_batch):.0f}x")
+          f"{np.median(len(Q) / batch) / np.median(len(Qn) / numpy_batch):.0f}x (one thread), "
+          f"{np.median(len(Q) / spread) / np.median(len(Qn) / numpy_batch):.0f}x "
+          f"({cores} threads)")
     print(f"one state from Python, us: checker.valid(q) {mmm(t_valid, 1e6)}; kernel call "
           f"{mmm(t_kernel, 1e6)}; NumPy {mmm(t_numpy1, 1e6)}")
 
@@ -330,6 +358,7 @@ def bookshelf_table(seeds, args) -> None:
 
 
 def main() -> None:
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="10 seeds, fewer rounds")
     parser.add_argument("--seeds", type=int, default=None, help="seeds per planner (100)")
@@ -339,6 +368,8 @@ def main() -> None:
                         help="only the UR5 bookshelf scene")
     parser.add_argument("--armkit-only", action="store_true",
                         help="armkit's rows only (no OMPL runs)")
+    parser.add_argument("--checker-only", action="store_true",
+                        help="the checker's throughput and first call only")
     args = parser.parse_args()
     seeds = range(args.seeds or (10 if args.quick else 100))
     print(f"load average at start: {os.getloadavg()}")
@@ -348,8 +379,12 @@ def main() -> None:
         return
     robot = armkit.robot("inspection_6dof")
     geometry = default_geometry(robot, 0.04)
-    print(first_call_compile())
+    for mode in ("auto", "compiled"):
+        print(first_call_compile(mode))
     checker_figures(CollisionChecker(robot, shelf(), geometry, R), args.quick)
+    if args.checker_only:
+        print(f"\nload average at end: {os.getloadavg()}")
+        return
     for scene_name, scene, (start, goal) in (("shelf", shelf(), SHELF),
                                              ("window", window(), WINDOW)):
         scene_table(scene_name, CollisionChecker(robot, scene, geometry, R), start, goal, seeds,

@@ -166,3 +166,64 @@ def test_checker_bad_input():
         CollisionChecker(robot, Scene(), ArmGeometry([9], [[0, 0, 0]], [[0, 0, 0]], [0.1]))
     with pytest.raises(InputError, match="expected last axis 6"):
         CollisionChecker(robot).valid([0, 0, 0])
+
+
+def test_kernel_sine_cosine_within_one_ulp_of_libm():
+    """The checker's inlined sine and cosine (range reduction and polynomials) against the C
+    library's, at angles near the reduction's quadrant edges, small, large and huge."""
+    import math
+
+    from armkit.planning.collision import sin_cos
+
+    rng = np.random.default_rng(4)
+    edges = np.arange(-40, 41) * (np.pi / 4)
+    x = np.concatenate([rng.uniform(-7, 7, 3000), rng.uniform(-1e5, 1e5, 500),
+                        edges, np.nextafter(edges, 0), np.nextafter(edges, 9),
+                        [0.0, -0.0, 1e-300, 5e-9, 1e6, -3e7, 1e300]])
+    for v in x:
+        s, c = sin_cos(v)
+        ls, lc = math.sin(v), math.cos(v)
+        assert abs(s - ls) <= np.spacing(abs(ls)) and abs(c - lc) <= np.spacing(abs(lc))
+    s, c = sin_cos(np.inf)
+    assert math.isnan(s) and math.isnan(c)
+
+
+def test_joint_angles_beyond_the_reduction_range_match_the_reduced_ones():
+    """Angles whose sines the kernel leaves to libm (|v| >= 1e5 rad) give the clearance of the
+    same angles taken modulo 2 pi, in a batch and one state at a time."""
+    robot = armkit.robot("inspection_6dof")
+    checker = CollisionChecker(robot, shelf(), default_geometry(robot, 0.04))
+    Q = random_q(robot, 50, seed=9)
+    turns = np.zeros_like(Q)
+    turns[:, ::2] = 2 * np.pi * 20_000                      # 1.26e5 rad on three joints
+    far = Q + turns
+    np.testing.assert_allclose(checker.clearance(far), checker.clearance(Q), atol=1e-9)
+    np.testing.assert_allclose([checker.clearance(q) for q in far], checker.clearance(Q),
+                               atol=1e-9)
+
+
+def test_kernel_sine_reduction_constants_split_half_pi():
+    """The three parts of pi/2 the reduction subtracts: the first two of 33 significant bits
+    (their products with any k below 2**20 are exact), the three summing to pi/2 within 1e-36,
+    pi from Machin's formula in integers."""
+    from fractions import Fraction
+
+    from armkit.planning.collision import _PI_2_HIGH, _PI_2_LOW, _PI_2_MID
+
+    def arctan_of_inverse(n: int, scale: int) -> int:
+        total, term, k = 0, scale // n, 1
+        while term:
+            total += term // k if k % 4 == 1 else -(term // k)
+            term //= n * n
+            k += 2
+        return total
+
+    scale = 10 ** 60
+    half_pi = Fraction(16 * arctan_of_inverse(5, scale) - 4 * arctan_of_inverse(239, scale),
+                       2 * scale)
+    for part in (_PI_2_HIGH, _PI_2_MID):
+        mantissa = Fraction(part)
+        while mantissa.denominator != 1:
+            mantissa *= 2
+        assert int(mantissa).bit_length() - (int(mantissa) & -int(mantissa)).bit_length() < 33
+    assert abs(Fraction(_PI_2_HIGH) + Fraction(_PI_2_MID) + Fraction(_PI_2_LOW) - half_pi) < 1e-36

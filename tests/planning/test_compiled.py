@@ -207,3 +207,40 @@ def test_edges_and_paths_from_python_match_the_dense_reference(shelf_checker):
     assert accepted >= 5
     assert shelf_checker.path_valid(SHELF_START[None])
     assert not shelf_checker.path_valid(np.vstack([SHELF_START, SHELF_GOAL]))
+
+
+def test_parallel_batch_gives_the_serial_values(shelf_checker):
+    """The batch spread over threads (chunks each starting afresh) returns exactly what the
+    serial kernel does, exact distances and verdicts alike, and both agree with the
+    reference."""
+    import os
+
+    from armkit.planning.collision import (
+        BATCH_CHUNK,
+        states_kernel,
+        states_parallel,
+    )
+
+    robot = shelf_checker.robot
+    F, I = shelf_checker.model
+    Q = random_q(robot, 3 * BATCH_CHUNK + 17, seed=12)
+    flat = Q.reshape(-1)
+    cap = 0.005 * (1 + 1e-9) + 1e-12
+    for floor, top in ((-np.inf, np.inf), (0.005, cap)):
+        serial, parallel = np.empty(len(Q)), np.empty(len(Q))
+        states_kernel(flat, F, I, floor, top, serial)
+        states_parallel(flat, F, I, floor, top, parallel)
+        np.testing.assert_array_equal(parallel, serial)
+    armkit.set_num_threads(os.cpu_count())
+    try:
+        found = shelf_checker.clearance(Q)
+        valid = shelf_checker.valid(Q)
+    finally:
+        armkit.set_num_threads(None)
+    states_kernel(flat, F, I, -np.inf, np.inf, serial)
+    np.testing.assert_array_equal(found, serial)
+    np.testing.assert_array_equal(valid, serial > 0.005)
+    some = Q[::97]
+    expected = np.array([reference.free_distance(robot, shelf_checker.geometry,
+                                                 shelf_checker.scene, q) for q in some])
+    np.testing.assert_allclose(found[::97], expected, atol=1e-7)

@@ -24,6 +24,10 @@ from numpy.typing import NDArray
 from armkit.jit import kernel
 from armkit.planning.collision import QUEUE_SIZE, CollisionChecker, edge_free, work_array
 
+# numba's cache keys a kernel on its own file only: these kernels compile collision.py's code
+# into themselves, so a change to the checker's kernels or its model's layout must come with a
+# change to this file (or a cleared cache), else the cached planners read the new model with the
+# old code. (Changed with the checker's work arrays of 2026-11-24.)
 _jit = kernel(cache=True, nogil=True)
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
