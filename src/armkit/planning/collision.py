@@ -253,11 +253,10 @@ def _sin_cos_reduced(x):
     y = r + (error - k * _PI_2_LOW)
     tail = (r - y) + (error - k * _PI_2_LOW)    # x - k pi/2 = y + tail
     z = y * y
-    ps = _SIN[7]
-    pc = _COS[7]
-    for i in range(6, -1, -1):                  # Horner, in z = y**2
-        ps = _SIN[i] + z * ps
-        pc = _COS[i] + z * pc
+    ps = _SIN[0] + z * (_SIN[1] + z * (_SIN[2] + z * (_SIN[3] + z * (          # Horner in z
+        _SIN[4] + z * (_SIN[5] + z * (_SIN[6] + z * _SIN[7]))))))
+    pc = _COS[0] + z * (_COS[1] + z * (_COS[2] + z * (_COS[3] + z * (
+        _COS[4] + z * (_COS[5] + z * (_COS[6] + z * _COS[7]))))))
     s = y + (tail + y * z * ps)
     h = 0.5 * z
     u = 1.0 - h                                 # and its rounding error, exactly:
