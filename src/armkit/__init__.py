@@ -14,10 +14,10 @@ the calls that need them.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
 from armkit.errors import ArmkitError, DriveError, InputError, ModelFileError
+from armkit.lazy import lazy_names
 
 # name -> the module that defines it
 _HOMES = {
@@ -65,17 +65,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
                                    retime, spline, tool_motion, trapezoidal)
 
 
-def __getattr__(name: str):
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'armkit' has no attribute {name!r}")
-    value = getattr(importlib.import_module(home), name)
-    globals()[name] = value             # later look-ups are plain attribute reads
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOMES))
+__getattr__, __dir__ = lazy_names(__name__, _HOMES)
 
 
 __version__ = "0.1.0"

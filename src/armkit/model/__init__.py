@@ -9,8 +9,9 @@ kernels need) does not import the file readers and their pydantic.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from armkit.lazy import lazy_names
 
 # name -> the module that defines it
 _HOMES = {
@@ -33,17 +34,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.model.urdf import URDFCollision, URDFTable, chain_from_urdf, read_urdf
 
 
-def __getattr__(name: str):
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'armkit.model' has no attribute {name!r}")
-    value = getattr(importlib.import_module(home), name)
-    globals()[name] = value             # later look-ups are plain attribute reads
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOMES))
+__getattr__, __dir__ = lazy_names(__name__, _HOMES)
 
 
 __all__ = list(_HOMES)

@@ -19,8 +19,9 @@ kinematics that `cartesian_line` needs.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from armkit.lazy import lazy_names
 
 _HOMES = {
     **dict.fromkeys(("CartesianPath", "cartesian_line"), "armkit.trajectory.cartesian"),
@@ -49,17 +50,7 @@ if TYPE_CHECKING:
     from armkit.trajectory.tool import ToolMotion, tool_motion
 
 
-def __getattr__(name: str):
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'armkit.trajectory' has no attribute {name!r}")
-    value = getattr(importlib.import_module(home), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_HOMES))
+__getattr__, __dir__ = lazy_names(__name__, _HOMES)
 
 
 __all__ = list(_HOMES)
