@@ -41,9 +41,11 @@ class Units:
         x = np.asarray(x, dtype=float)
         return x / 1000.0 if self.length == "mm" else x
 
+    # A value too large for the file's units becomes inf, which the caller reports as such.
     def length_from_si(self, x: ArrayLike) -> NDArray:
         x = np.asarray(x, dtype=float)
-        return x * 1000.0 if self.length == "mm" else x
+        with np.errstate(over="ignore"):
+            return x * 1000.0 if self.length == "mm" else x
 
     def angle_to_si(self, x: ArrayLike) -> NDArray:
         x = np.asarray(x, dtype=float)
@@ -51,7 +53,8 @@ class Units:
 
     def angle_from_si(self, x: ArrayLike) -> NDArray:
         x = np.asarray(x, dtype=float)
-        return np.rad2deg(x) if self.angle == "deg" else x
+        with np.errstate(over="ignore"):
+            return np.rad2deg(x) if self.angle == "deg" else x
 
 
 SI = Units()
