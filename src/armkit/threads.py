@@ -27,8 +27,9 @@ def _from_environment() -> int | None:
 
 
 _UNREAD = object()
-_chosen: int | None | object = _UNREAD      # the environment is read at the first batch, where a bad
-#                                    value is reported as the call's InputError
+# The environment is read at the first batch, where a bad value is reported as the call's
+# InputError.
+_chosen: int | None | object = _UNREAD
 
 
 def set_num_threads(n: int | None) -> None:

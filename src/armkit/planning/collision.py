@@ -305,7 +305,8 @@ def joint_trig(Q, base, count, F, I, T, at):
 # bounding boxes (o, 6: lower corner, upper corner), the capsules' bounding-ball radii (m), the
 # box of the whole scene (6). Work W: segments (m, 6), p, d and the sort scratch (14), the
 # capsules' bounding balls (m, 4), the last closest capsule-obstacle pair, q (n), the capsules'
-# world bounding boxes and their distances from the scene's box (m, 7), one state's joint values, sines and cosines (3n: `joint_trig`).
+# world bounding boxes and their distances from the scene's box (m, 7), one state's joint
+# values, sines and cosines (3n: `joint_trig`).
 
 @_inline
 def weights_at(I):
@@ -348,10 +349,11 @@ def _times_link(a, b, c, d, F, lk):
 def free_distance(T, at, stride, F, I, W, floor, cap):
     """How far (m) every point of the arm may move from a state without contact, the state
     given by its moving joints' values T[at : at + n], their sines T[at + stride ...] and
-    cosines T[at + 2 stride ...] (`joint_trig`): ``min(gap to any obstacle, gap between two non-adjacent capsules / 2)`` (both may
-    move), returned as ``min(that, cap)``; it stops early, with some value <= floor, once a pair is
-    within floor. Obstacles a cheap lower bound (bounding ball, then for a box the separation
-    along its axes) puts beyond the best so far are skipped. F, I: the model; W: work."""
+    cosines T[at + 2 stride ...] (`joint_trig`): ``min(gap to any obstacle, gap between two
+    non-adjacent capsules / 2)`` (both may move), returned as ``min(that, cap)``; it stops
+    early, with some value <= floor, once a pair is within floor. Obstacles a cheap lower bound
+    (bounding ball, then for a box the separation along its axes) puts beyond the best so far
+    are skipped. F, I: the model; W: work."""
     n, m, npairs, nobs = I[0], I[1], I[2], I[3]
     i_body = 4 + n
     i_pairs = i_body + m
