@@ -3,19 +3,20 @@
 A chain reaches the kernels as `KernelChain`: joint i turns about (or slides along) z of the
 frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion, packed in one
 float and one int array (`KernelChain.floats`, `KernelChain.ints`; F and I in the kernels).
-`pose_one` and `frames_one` carry a pose as 12 scalars (rotation rows and position) so that
-the whole product stays in registers; `pose_jacobian_one` keeps it in its output's rows (less code to compile
-for the first IK call, as fast). The batch loops come twice, serial and parallel, and `run`
-picks one by the batch's size and the idle cores (`armkit.threads`).
+`pose_one` and `frames_one` carry a pose as 12 scalars (rotation rows and position) so that the
+whole product stays in registers; `pose_jacobian_one` keeps it in its output's rows (less code
+to compile for the first IK call, as fast). The batch loops come twice, serial and parallel, and
+`run` picks one by the batch's size and the idle cores (`armkit.threads`).
 
-Compilation is lazy (no explicit signatures, which would compile every kernel, the parallel
-ones included, when this module is imported): a call compiles only the kernels it runs, one
+Compilation is lazy (no explicit signatures, which would compile every kernel, the parallel ones
+included, when this module is imported): a call compiles only the kernels it runs, one
 configuration from Python calls a `_one` kernel directly, and a call with little work runs the
-kernels as Python until compiling pays (`armkit.jit`). The small helpers are inlined into their callers at numba's IR level, which saves a
-separate compilation (and cache file) for each of them.
+kernels as Python until compiling pays (`armkit.jit`). The small helpers are inlined into their
+callers at numba's IR level, which saves a separate compilation (and cache file) for each of
+them.
 
-benchmarks/fk.py measures these against a vectorised NumPy chain, roboticstoolbox's C++ code
-and pinocchio; benchmarks/startup.py measures what the first call costs.
+benchmarks/fk.py measures these against a vectorised NumPy chain, roboticstoolbox's C++ code and
+pinocchio; benchmarks/startup.py measures what the first call costs.
 """
 
 from __future__ import annotations
