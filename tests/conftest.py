@@ -26,9 +26,10 @@ def any_robot(request) -> armkit.Robot:
 
 @pytest.fixture(scope="session")
 def dask_client():
-    """A two-worker Dask cluster on loopback (separate processes), shared by the tests."""
+    """A two-worker Dask cluster on loopback (separate processes), shared by the tests of one
+    pytest worker; its HTTP server on a free port, as another worker may hold Dask's default."""
     from distributed import Client, LocalCluster
 
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+                      dashboard_address="127.0.0.1:0") as cluster, Client(cluster) as client:
         yield client
