@@ -49,7 +49,8 @@ def _span(breaks, table, t, out, start, stop):
     """Samples start..stop-1: out[r, s, j] = derivative r of joint j at t[s].
 
     table[i, r, k, j] holds coefficient k of derivative r on piece i (falling factorials
-    applied, powers above K - 1 - r zero), so each derivative is one Horner pass. Sorted times
+    applied, powers above K - 1 - r zero), so each derivative is one Horner pass; a derivative
+    above the degree (r >= K) is its zero row k = 0. Sorted times
     come in runs that share a piece; a run is evaluated with the samples in the innermost
     loop, which the compiler vectorises (a Horner chain per sample and joint would wait on
     itself). Times in no order fall back to one sample at a time.
@@ -67,9 +68,10 @@ def _span(breaks, table, t, out, start, stop):
         if e - s < _RUN:
             x = t[s] - breaks[i]
             for r in range(nder):
+                top = max(K - 1 - r, 0)
                 for j in range(n):
-                    v = table[i, r, K - 1 - r, j]
-                    for k in range(K - 2 - r, -1, -1):
+                    v = table[i, r, top, j]
+                    for k in range(top - 1, -1, -1):
                         v = v * x + table[i, r, k, j]
                     out[r, s, j] = v
             s += 1
@@ -78,11 +80,12 @@ def _span(breaks, table, t, out, start, stop):
         for q in range(count):
             tau[q] = t[s + q] - breaks[i]
         for r in range(nder):
+            top = max(K - 1 - r, 0)
             for j in range(n):
-                c = table[i, r, K - 1 - r, j]
+                c = table[i, r, top, j]
                 for q in range(count):
                     acc[q] = c
-                for k in range(K - 2 - r, -1, -1):
+                for k in range(top - 1, -1, -1):
                     c = table[i, r, k, j]
                     for q in range(count):
                         acc[q] = acc[q] * tau[q] + c
