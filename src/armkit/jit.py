@@ -198,16 +198,19 @@ def kernel(**options):
     return lambda function: Kernel(function, options)
 
 
-@functools.cache
-def _numba():
-    """numba, imported on the first compilation, with kernels typed as their dispatchers (so
-    that a kernel calling another is compiled as numba compiles calls between its own)."""
-    import numba
+def _typeof_kernel(value: Kernel, context):
+    """numba's type of a kernel: its dispatcher's (so that a kernel calling another is compiled
+    as numba compiles calls between its own dispatchers)."""
     from numba.core import types as numba_types
+
+    return numba_types.Dispatcher(value.dispatcher)
+
+
+def _numba():
+    """numba, imported on the first compilation, with `_typeof_kernel` registered in it."""
+    import numba
     from numba.extending import typeof_impl
 
-    @typeof_impl.register(Kernel)
-    def _typeof_kernel(value, context):
-        return numba_types.Dispatcher(value.dispatcher)
-
+    if Kernel not in typeof_impl.registry:
+        typeof_impl.register(Kernel)(_typeof_kernel)
     return numba

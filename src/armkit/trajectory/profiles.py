@@ -215,6 +215,14 @@ _NUMBER = np.empty(0)       # a limit's "no value per joint": the timing kernel 
 _FLOAT = np.dtype(float)    # NumPy converts a dtype given as an instance faster than as a type
 
 
+def _limit(x: ArrayLike) -> tuple[NDArray, float]:
+    """A limit as the timing kernel takes it: a float as its number (with `_NUMBER` as the
+    array), anything else as an array (a number: shape (1,)) with the number unused."""
+    if type(x) is float:
+        return _NUMBER, x
+    return np.ascontiguousarray(x, dtype=_FLOAT), 0.0
+
+
 def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
          jmax: ArrayLike, sync: str) -> Profile | None:
     """One problem through the timing kernel with as few steps in Python as it takes: q0, qf
@@ -227,13 +235,7 @@ def _one(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayL
         return None                             # a batch: no copy to find that out
     try:
         q0, qf = np.array(q0, dtype=_FLOAT), np.array(qf, dtype=_FLOAT)
-        # A float as the kernel's number, anything else as an array (a number: shape (1,)).
-        V, v = ((_NUMBER, vmax) if type(vmax) is float
-                else (np.ascontiguousarray(vmax, dtype=_FLOAT), 0.0))
-        A, a = ((_NUMBER, amax) if type(amax) is float
-                else (np.ascontiguousarray(amax, dtype=_FLOAT), 0.0))
-        J, j = ((_NUMBER, jmax) if type(jmax) is float
-                else (np.ascontiguousarray(jmax, dtype=_FLOAT), 0.0))
+        (V, v), (A, a), (J, j) = _limit(vmax), _limit(amax), _limit(jmax)
     except (TypeError, ValueError):
         return None
     if not q0.ndim == qf.ndim == V.ndim == A.ndim == J.ndim == 1:
@@ -284,9 +286,7 @@ def _single(q0: ArrayLike, qf: ArrayLike) -> tuple[NDArray, NDArray]:
 def _profile(order: int, q0: ArrayLike, qf: ArrayLike, vmax: ArrayLike, amax: ArrayLike,
              jmax: ArrayLike, sync: str) -> Profile:
     """Run the timing kernel on the problems (a trapezoid's jmax is 1.0, unused), stacked and
-    broadcast first: a batch, or one problem that `_one` did not take."""
-    if sync != "time" and sync != "phase":
-        raise InputError(f"sync: expected 'time' or 'phase', found {sync!r}")
+    broadcast first: a batch, or one problem that `_one` did not take (`_one` checked sync)."""
     arrays = _problem(q0, qf, vmax, amax, jmax)
     lead, n = arrays.shape[1:], arrays.shape[-1]
     K = 3 if order == 2 else 7

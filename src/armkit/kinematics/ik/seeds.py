@@ -49,6 +49,12 @@ _COLUMNS = {(a, b, c): _columns((a, b, c)) for a in (False, True) for b in (Fals
 def features(T: NDArray, length: float) -> NDArray:
     """Pose features (..., 12) whose distances approximate task errors: the position, then the
     tool's x, y and z axes times `length` (m per rad)."""
+    if T.shape == (1, 4, 4):
+        # One pose (a single IK call's): the same products in plain Python, several times
+        # cheaper than NumPy's calls on so small an array.
+        v = T.ravel().tolist()
+        return np.array([[v[3], v[7], v[11]] + [v[4 * r + c] * length for c in range(3)
+                                                for r in range(3)]])
     F = np.swapaxes(T[..., :3, (3, 0, 1, 2)], -1, -2).reshape(T.shape[:-2] + (12,))
     F[..., 3:] *= length
     return F
@@ -164,14 +170,7 @@ class SeedBank:
         """Starts (N, count, n) for targets (N, 4, 4): the `count` samples nearest each target
         by the features the mask uses, nearest first."""
         best = np.empty((targets.shape[0], min(count, self.q.shape[0])), dtype=np.int64)
-        if targets.shape[0] == 1:
-            # One target: its features in plain Python (the same products as `features`),
-            # several times cheaper than NumPy's calls on a (1, 4, 4) array.
-            v, length = targets.ravel().tolist(), self.length
-            wanted = np.array([[v[3], v[7], v[11]] + [v[4 * r + c] * length for c in range(3)
-                                                      for r in range(3)]])
-        else:
-            wanted = np.ascontiguousarray(features(targets, self.length))
+        wanted = np.ascontiguousarray(features(targets, self.length))
         _nearest.sized(targets.shape[0], wanted, self.features, feature_columns(mask), self.lo,
                        self.inv, self.cells, self.order, self.start, best)
         return self.q.take(best, axis=0)        # as self.q[best], without fancy indexing's cost

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armkit.jit import kernel
 from armkit.errors import InputError
+from armkit.jit import kernel
 
 _jit = kernel(cache=True, nogil=True, error_model="numpy")
 _inner = kernel(nogil=True, error_model="numpy")      # called by kernels only: not cached
