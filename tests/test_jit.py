@@ -41,6 +41,12 @@ def _squares(a, out):
         out[i] = a[i] * a[i] + 1.0
 
 
+@pytest.fixture(autouse=True)
+def _auto_mode(monkeypatch):
+    """The default tiers, whatever ARMKIT_JIT the suite runs under."""
+    monkeypatch.setattr(jit, "mode", "auto")
+
+
 def _fresh(function, **options) -> Kernel:
     """A kernel of its own per test, never compiled before."""
     return Kernel(function, options)
