@@ -39,3 +39,30 @@ def test_every_exported_name_resolves():
 def test_an_unknown_name_is_an_attribute_error():
     with pytest.raises(AttributeError, match="no attribute 'fkk'"):
         armkit.fkk  # noqa: B018
+
+
+def test_the_command_line_loads_what_its_command_needs():
+    loaded = modules_after("import armkit.cli")
+    for heavy in ("numba", "scipy", "matplotlib", "plotly", "pymodbus", "dask",
+                  "armkit.planning.collision", "armkit.perception.target"):
+        assert heavy not in loaded, heavy
+
+
+def test_no_exported_name_is_shadowed_by_a_module_of_the_same_name():
+    """Every submodule imported first, then each package's names read: a function is never
+    replaced by the module Python binds to the package when it imports that module."""
+    script = """
+import importlib, pkgutil, types, armkit
+names = ["armkit"] + [info.name for info in pkgutil.walk_packages(armkit.__path__, "armkit.")
+                      if info.name != "armkit.__main__"]
+for name in names:
+    importlib.import_module(name)
+for name in names:
+    package = importlib.import_module(name)
+    for name in getattr(package, "__all__", ()):
+        if isinstance(getattr(package, name), types.ModuleType):
+            print(f"{package.__name__}.{name}")
+"""
+    done = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
+                          text=True)
+    assert done.stdout == "", done.stdout

@@ -39,6 +39,40 @@ def test_rpy_is_z_then_y_then_x_fixed_axes():
                                atol=1e-15)
 
 
+def test_rpy_matches_scipy_and_rebuilds_the_rotation_better():
+    R = Rotation.random(20_000, random_state=3).as_matrix()
+    ours = sp.matrix_to_rpy(R)
+    theirs = Rotation.from_matrix(R).as_euler("xyz")
+    wrapped = (ours - theirs + np.pi) % (2 * np.pi) - np.pi
+    assert np.abs(wrapped).max() < 1e-13
+    assert np.abs(sp.rpy_to_matrix(ours) - R).max() <= np.abs(sp.rpy_to_matrix(theirs) - R).max()
+    assert np.abs(sp.rpy_to_matrix(ours) - R).max() < 1e-15
+
+
+@pytest.mark.parametrize("sign", [1, -1])
+def test_rpy_at_gimbal_lock_sets_yaw_to_zero_as_scipy_does(sign):
+    rng = np.random.default_rng(5)
+    rpy = np.column_stack([rng.uniform(-3, 3, 500), np.full(500, sign * np.pi / 2),
+                           rng.uniform(-3, 3, 500)])
+    R = sp.rpy_to_matrix(rpy)
+    ours = sp.matrix_to_rpy(R)
+    with pytest.warns(UserWarning, match="Gimbal lock"):
+        theirs = Rotation.from_matrix(R).as_euler("xyz")
+    assert np.all(ours[:, 2] == 0.0)
+    np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(sp.rpy_to_matrix(ours), R, rtol=0, atol=1e-15)
+
+
+@given(st.floats(-np.pi, np.pi), st.floats(-np.pi / 2, np.pi / 2), st.floats(-np.pi, np.pi))
+@example(0.3, np.pi / 2 - 2e-7, -1.2)          # just outside the lock: ill-conditioned angles
+def test_rpy_rebuilds_any_rotation_outside_the_lock(r, p, y):
+    R = sp.rpy_to_matrix([r, p, y])
+    rebuilt = sp.rpy_to_matrix(sp.matrix_to_rpy(R))
+    # Inside the lock yaw is dropped, which moves R by about twice the pitch's distance to it.
+    allowed = 2e-15 if np.cos(p) > sp.GIMBAL_LOCK else 2e-15 + 2.5 * np.cos(p)
+    assert np.abs(rebuilt - R).max() <= allowed
+
+
 @given(transforms())
 def test_inverse_is_inverse(T):
     np.testing.assert_allclose(T @ sp.invert(T), np.eye(4), atol=1e-12)

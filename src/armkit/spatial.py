@@ -14,15 +14,17 @@ Conventions
 
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 
-# scipy's Rotation is imported inside the functions that use it: it costs about 0.2 s, which
-# loading a robot file or computing a pose error need not pay.
+# scipy's Rotation is imported inside the quaternion functions that use it: it costs about
+# 0.2 s, which loading a robot file, printing a pose or computing a pose error need not pay.
+
+# cos(pitch) at or below which roll and yaw are not told apart (gimbal lock): scipy's 1e-7 rad.
+GIMBAL_LOCK = 1e-7
 
 
 def as_array(x: ArrayLike, name: str, tail: tuple[int, ...]) -> NDArray:
@@ -177,13 +179,27 @@ def rpy_to_matrix(rpy: ArrayLike, *, degrees: bool = False) -> NDArray:
 def matrix_to_rpy(R: ArrayLike, *, degrees: bool = False) -> NDArray:
     """Roll, pitch, yaw of rotations (..., 3, 3) -> (..., 3); pitch in [-pi/2, pi/2].
 
-    At pitch = +-pi/2 (gimbal lock) only roll -+ yaw is defined: yaw is set to zero and roll
-    carries it (scipy's convention).
+    Pitch is ``atan2(-R[2, 0], hypot(R[2, 1], R[2, 2]))``, accurate at every angle (an arcsine
+    loses half the digits near +-pi/2); yaw is ``atan2(R[1, 0], R[0, 0])``, and roll is read
+    from ``Rz(-yaw) @ R``, so that the three angles rebuild R to rounding error even where roll
+    and yaw alone are ill-conditioned. Within `GIMBAL_LOCK` of +-pi/2 only roll -+ yaw is
+    defined: yaw is set to zero and roll carries it, as scipy's ``as_euler("xyz")`` does.
+
+    Example
+    -------
+    >>> matrix_to_rpy(rpy_to_matrix([0.1, -0.2, 0.3])).round(15) + 0.0
+    array([ 0.1, -0.2,  0.3])
     """
-    rot, lead = _to_scipy(R)
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Gimbal lock", category=UserWarning)
-        return rot.as_euler("xyz", degrees=degrees).reshape(lead + (3,))
+    R = np.asarray(R, dtype=float)
+    cos_pitch = np.hypot(R[..., 2, 1], R[..., 2, 2])
+    yaw = np.where(cos_pitch <= GIMBAL_LOCK, 0.0, np.arctan2(R[..., 1, 0], R[..., 0, 0]))
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    rpy = np.empty(R.shape[:-2] + (3,))
+    rpy[..., 0] = np.arctan2(sy * R[..., 0, 2] - cy * R[..., 1, 2],
+                             cy * R[..., 1, 1] - sy * R[..., 0, 1])
+    rpy[..., 1] = np.arctan2(-R[..., 2, 0], cos_pitch)
+    rpy[..., 2] = yaw
+    return np.rad2deg(rpy) if degrees else rpy
 
 
 def quat_to_matrix(quat: ArrayLike, *, scalar_first: bool = False) -> NDArray:

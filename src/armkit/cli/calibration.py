@@ -10,9 +10,7 @@ import numpy as np
 import typer
 
 import armkit
-from armkit.calibration.accuracy import accuracy_report
 from armkit.calibration.handeye import METHODS, handeye
-from armkit.calibration.identify import calibrate, dependency_text, select_poses
 from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
 from armkit.cli.robots import RobotArg
 from armkit.errors import InputError
@@ -136,6 +134,8 @@ def calibrate_command(
              "it (.png).")] = None,
     as_json: JsonFlag = False) -> None:
     """Kinematic calibration: the robot's table, base and tool from measured tool positions."""
+    from armkit.calibration.identify import calibrate, select_poses
+
     model = armkit.robot(robot)
     out = _writable(out)
     if pool is not None and select is None:
@@ -208,6 +208,8 @@ def calibrate_command(
 
 
 def _show_calibration(doc: dict, model) -> None:
+    from armkit.calibration.identify import dependency_text
+
     L = doc["units"]["length"]
     stdout.print(f"{doc['robot']}: {doc['fitted']} measurements fitted, {doc['held_out']} "
                  f"held out")
@@ -249,6 +251,8 @@ def accuracy_command(
     out: Annotated[Optional[Path], typer.Option(help="Write the figure (PNG) here.")] = None,
     as_json: JsonFlag = False) -> None:
     """Commanded against measured positions: error per point, mean, max, rms, bias per axis."""
+    from armkit.calibration.accuracy import accuracy_report
+
     out = _writable(out)
     data = read_accuracy(file)
     u = data.units
