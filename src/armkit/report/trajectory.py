@@ -106,8 +106,7 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
             for colour, j in zip(COLOURS, joints):
                 ax.plot(t, values[row][:, j], color=colour, lw=1.6, label=joint_label(robot, j))
                 _draw_limit(ax, limits[row][j], values[row][:, j], colour)
-            for knot in tr.knots:
-                ax.axvline(knot, color="0.6", lw=0.8, ls=":")
+            _knot_lines(ax, tr.knots)
             ax.grid(alpha=0.3)
             if row == 0 and len(trajectories) > 1:
                 ax.set_title(name)
@@ -140,6 +139,13 @@ def _limits(robot: Robot, vmax: NDArray | None, amax: NDArray | None) -> list[ND
 
 
 _LIMIT_STYLE = {"ls": "--", "lw": 1.0, "alpha": 0.8}
+
+
+def _knot_lines(ax, knots: NDArray) -> None:
+    """Dotted vertical lines at the knot times (s), as one collection: one artist per knot
+    would be drawn, and measured for the layout, one by one in every panel."""
+    ax.vlines(knots, 0.0, 1.0, transform=ax.get_xaxis_transform(), colors="0.6", lw=0.8,
+              linestyles=":")
 
 
 def _draw_limit(ax, bounds: NDArray, values: NDArray, colour: str,
@@ -199,8 +205,7 @@ def motion_figure(robot: Robot, tr: Trajectory, joints: Sequence[int] | None = N
             ax = axes[row, col]
             ax.plot(t, values[col][:, j], color=colour, lw=1.4, label=joint_label(robot, j))
             _draw_limit(ax, limits[col][j], values[col][:, j], "tab:red", label="limit")
-            for knot in tr.knots:
-                ax.axvline(knot, color="0.6", lw=0.8, ls=":")
+            _knot_lines(ax, tr.knots)
             ax.grid(alpha=0.3)
             if row == 0:
                 ax.set_title(QUANTITIES[col])
