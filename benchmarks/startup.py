@@ -15,11 +15,13 @@ The calls: `fk` and `jacobian` of one UR5 configuration; `ik` of one UR5 pose (c
 its 8 closed-form solutions (`ik_solutions`), and `ik` of one tool_changer_6dof pose (numeric,
 Levenberg-Marquardt); `workspace` of inspection_6dof with 10,000 samples; `spline` 4-5-5
 through paper 4's Table 1, sampled at 100 times; one 6-joint `jerk_limited` motion; `retime`
-of 10 waypoints. ``--calls`` runs some of them only. Beside the wall time of the first call on
-an empty cache, its CPU time (``time.process_time``), which a busy machine inflates less. The
-reference: the same first call compiled from the start (``ARMKIT_JIT=compiled``, numba's own
-behaviour, what every call did before `armkit.jit`) into an empty cache; the ratio is its time
-over the default's.
+of 10 waypoints; "command line", a whole process timed from outside: ``armkit fk ur5 ...``
+(``python -m armkit``), with as its reference the process that only imports what such a
+command cannot do without (NumPy, typer, rich, pydantic, PyYAML). ``--calls`` runs some of
+them only. Beside the wall time of the first call on an empty cache, its CPU time
+(``time.process_time``), which a busy machine inflates less. The reference: the same first call
+compiled from the start (``ARMKIT_JIT=compiled``, numba's own behaviour, what every call did
+before `armkit.jit`) into an empty cache; the ratio is its time over the default's.
 Their inputs are built without armkit's kernels, so each process compiles only what its own
 call needs.
 """
@@ -32,6 +34,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 
 import numpy as np
 
@@ -92,16 +95,29 @@ print(json.dumps({"import": imported - start, "robot": loaded - imported, "call"
 """
 
 CALLS = ("import", "fk", "jacobian", "ik closed form", "ik_solutions", "ik numeric", "workspace",
-         "spline", "jerk_limited", "retime")
+         "spline", "jerk_limited", "retime", "command line")
+COMMAND = ["-m", "armkit", "fk", "ur5", "0", "-90", "90", "-90", "-90", "0"]
+FLOOR = ["-c", "import numpy, typer, rich.console, pydantic, yaml"]
 
 
 def run(what: str, cache: str, mode: str = "auto") -> dict[str, float]:
     env = {**os.environ, "NUMBA_CACHE_DIR": cache, "ARMKIT_JIT": mode}
+    if what == "command line":
+        return {"call": process_time(COMMAND if mode == "auto" else FLOOR, env), "numba": False}
     done = subprocess.run([sys.executable, "-c", CHILD, what], env=env, capture_output=True,
                           text=True)
     if done.returncode:
         raise SystemExit(f"{what}: {done.stderr.strip().splitlines()[-1]}")
     return json.loads(done.stdout)
+
+
+def process_time(arguments: list[str], env: dict) -> float:
+    """Wall time (s) of a fresh Python process with these arguments, from start to exit."""
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, *arguments], env=env, capture_output=True, text=True)
+    if done.returncode:
+        raise SystemExit(f"{arguments}: {done.stderr.strip().splitlines()[-1]}")
+    return time.perf_counter() - start
 
 
 def main() -> None:
@@ -129,21 +145,28 @@ def main() -> None:
     for what in calls:
         key = "import" if what == "import" else "call"
         a = Spread(tuple(r[key] for r in cold[what]))
-        cpu = Spread(tuple(r["call_cpu"] for r in cold[what])).text("s") if key == "call" else ""
+        cpu = Spread(tuple(r["call_cpu"] for r in cold[what])).text("s") \
+            if what not in ("import", "command line") else ""
         b = Spread(tuple(r[key] for r in warm[what]))
         c = ratio = ""
         if compiled[what]:
             reference = Spread(tuple(r[key] for r in compiled[what]))
             c = reference.text("s")
             ratio = Spread(tuple(r[key] / q[key] for r, q in zip(compiled[what], cold[what])))
-            ratio = f"{reference.median / a.median:.0f}x [{ratio.min:.0f}-{ratio.max:.0f}]"
+            digits = 0 if ratio.min >= 10 else 2
+            ratio = (f"{reference.median / a.median:.{digits}f}x "
+                     f"[{ratio.min:.{digits}f}-{ratio.max:.{digits}f}]")
         numba = sum(r["numba"] for r in cold[what] + warm[what])
         print(f"{what:16} {a.text('s'):>24} {cpu:>24} {b.text('s'):>24} {c:>24} {ratio:>20}"
               + (f"  (numba imported in {numba} of {2 * len(cold[what])})" if numba else ""))
-    robots = Spread(tuple(r["robot"] for c in calls if c != "import" for r in cold[c] + warm[c]))
+    robots = Spread(tuple(r["robot"] for c in calls if c not in ("import", "command line")
+                          for r in cold[c] + warm[c]))
     print(f"\n`import armkit` is the import alone; every other row is the call alone, after the"
           f"\nimport and `armkit.robot(...)` (loading a built-in robot: {robots.text('s')}).")
-    imports = [r["import"] for c in calls for r in cold[c] + warm[c]]
+    if "command line" in calls:
+        print("`command line`: the whole process; its reference column is the process that only "
+              "imports\nNumPy, typer, rich, pydantic and PyYAML.")
+    imports = [r["import"] for c in calls if c != "command line" for r in cold[c] + warm[c]]
     print(f"`import armkit` over all {len(imports)} processes: median {np.median(imports):.3f} s")
 
 
