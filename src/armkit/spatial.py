@@ -14,7 +14,6 @@ Conventions
 
 from __future__ import annotations
 
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -147,7 +146,7 @@ def skew(v: ArrayLike) -> NDArray:
     return S
 
 
-# --- rotation parametrisations, through scipy's Rotation ----------------------------------------
+# --- rotation parametrisations: roll-pitch-yaw here, quaternions through scipy's Rotation -------
 
 def _from_scipy(rot, lead: tuple[int, ...]) -> NDArray:
     return rot.as_matrix().reshape(lead + (3, 3))
