@@ -41,7 +41,7 @@ def test_an_unknown_name_is_an_attribute_error():
         armkit.fkk  # noqa: B018
 
 
-def test_the_command_line_loads_what_its_command_needs():
+def test_the_command_line_starts_without_the_heavy_dependencies():
     loaded = modules_after("import armkit.cli")
     for heavy in ("numba", "scipy", "matplotlib", "plotly", "pymodbus", "dask",
                   "armkit.planning.collision", "armkit.perception.target"):
@@ -59,9 +59,9 @@ for name in names:
     importlib.import_module(name)
 for name in names:
     package = importlib.import_module(name)
-    for name in getattr(package, "__all__", ()):
-        if isinstance(getattr(package, name), types.ModuleType):
-            print(f"{package.__name__}.{name}")
+    for exported in getattr(package, "__all__", ()):
+        if isinstance(getattr(package, exported), types.ModuleType):
+            print(f"{package.__name__}.{exported}")
 """
     done = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
                           text=True)
