@@ -30,6 +30,7 @@ from __future__ import annotations
 import argparse
 import logging
 import time
+from functools import partial
 
 import numpy as np
 import ruckig
@@ -54,18 +55,6 @@ def line(case: str, ours: Spread, name: str, ref: Spread, unit: str = "ms"):
 def pair(ours, reference, rounds: int, number: int = 1) -> tuple[Spread, Spread]:
     times = interleaved({"ours": ours, "reference": reference}, rounds, number)
     return times["ours"], times["reference"]
-
-
-def thread_interleaved(functions, rounds: int, number: int = 1) -> dict[str, Spread]:
-    """`common.interleaved` in this thread's CPU time (`time.thread_time`), not wall time."""
-    times: dict[str, list[float]] = {name: [] for name in functions}
-    for _ in range(rounds):
-        for name, f in functions.items():
-            start = time.thread_time()
-            for _ in range(number):
-                f()
-            times[name].append((time.thread_time() - start) / number)
-    return {name: Spread(tuple(t)) for name, t in times.items()}
 
 
 def per(spread: Spread, count: int) -> Spread:
@@ -145,7 +134,7 @@ def profiles(rng, pairs: int, repeat: int, cpu: bool = False) -> None:
     clock = "thread CPU time" if cpu else "wall time"
     print(f"3. jerk-limited profiles, 6 joints, {pairs} random start/goal pairs, time sync "
           f"({clock})")
-    timed = thread_interleaved if cpu else interleaved
+    timed = partial(interleaved, clock=time.thread_time if cpu else time.perf_counter)
     q0, qf = rng.uniform(-3, 3, (pairs, 6)), rng.uniform(-3, 3, (pairs, 6))
     vmax, amax, jmax = rng.uniform(0.5, 2, 6), rng.uniform(1, 4, 6), rng.uniform(2, 20, 6)
     otg, inp, out = ruckig.Ruckig(6), ruckig.InputParameter(6), ruckig.Trajectory(6)

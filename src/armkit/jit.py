@@ -127,8 +127,8 @@ class Kernel:
 
     def light(self, *args):
         """Call with little work: as Python while that is cheaper than compiling (see above)."""
-        if self._compiled or _tier.python:
-            return self(*args)
+        if _tier.python:                    # inside another kernel's Python run
+            return self.py_func(*args)
         chosen = mode or _mode()
         if chosen == "compiled" or (chosen == "auto" and self.python_seconds >= PYTHON_BUDGET):
             return self.compiled()(*args)

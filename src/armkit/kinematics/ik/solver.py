@@ -171,14 +171,9 @@ def _pose_fast(target) -> tuple[NDArray, list] | None:
 
 
 def reach_bound(robot: Robot) -> float:
-    """An upper bound (m) on the distance from joint 1's axis point (``chain.points[0]``) to
-    the tool point.
-
-    Consecutive axis points are fixed in the link between them, so the tool can be no farther
-    than the sum of those distances, plus the longest stroke of each prismatic joint. A target
-    farther than this is out of reach, whatever the solver. The chain computes it once
-    (`Chain.reach`).
-    """
+    """An upper bound (m) on the distance from joint 1's axis point to the tool point:
+    `Chain.reach` (see there), which the chain computes once. A target farther than this is out
+    of reach, whatever the solver."""
     return robot.chain.reach
 
 

@@ -27,6 +27,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.jit import kernel
+from armkit.kinematics._kernels import LIGHT_CONFIGURATIONS
+from armkit.model.chain import frozen_array
 
 _jit = kernel(cache=True, nogil=True, error_model="numpy")
 _inner = kernel(nogil=True, error_model="numpy")      # called by kernels only: not cached
@@ -54,11 +56,6 @@ def as_mask(mask: str | ArrayLike) -> NDArray:
     return flags.astype(bool)
 
 
-def _frozen(a: NDArray) -> NDArray:
-    a.setflags(write=False)
-    return a
-
-
 @dataclass(frozen=True)
 class MaskForms:
     """One mask in the forms the solvers use: flags (6,) bool, ints (6,) int64 (the kernels'
@@ -72,8 +69,8 @@ class MaskForms:
 
 def _forms(flags: tuple[int, ...]) -> MaskForms:
     names = {value: name for name, value in NAMED_MASKS.items()}
-    return MaskForms(_frozen(np.array(flags, dtype=bool)), _frozen(np.array(flags, np.int64)),
-                     _frozen(np.flatnonzero(flags).astype(np.int64)),
+    return MaskForms(frozen_array(flags, bool), frozen_array(flags, np.int64),
+                     frozen_array(np.flatnonzero(flags), np.int64),
                      names.get(flags, "".join(str(f) for f in flags)))
 
 
@@ -272,5 +269,5 @@ def task_errors(T: ArrayLike, T_target: ArrayLike, mask: NDArray) -> tuple[NDArr
     flat_target = np.broadcast_to(T_target, lead + (4, 4)).reshape(-1, 4, 4).copy()
     position, rotation = np.empty(flat.shape[0]), np.empty(flat.shape[0])
     _errors_batch.sized(flat.shape[0], flat, flat_target, np.asarray(mask, dtype=np.int64),
-                        position, rotation, few=1024)
+                        position, rotation, few=LIGHT_CONFIGURATIONS)
     return position.reshape(lead), rotation.reshape(lead)
