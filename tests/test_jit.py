@@ -70,6 +70,23 @@ def test_the_budget_spent_a_light_call_compiles(monkeypatch):
     assert outer(np.arange(3.0)) == 6.0
 
 
+def _squares_numpy(a, out):
+    out[:] = a * a + 1.0
+
+
+def test_a_numpy_version_runs_the_light_calls_under_the_same_budget(monkeypatch):
+    calls = []
+    squares = Kernel(_squares, {}, lambda a, out: calls.append(len(a)) or _squares_numpy(a, out))
+    a = np.linspace(-1.0, 1.0, 7)
+    light, compiled = np.empty_like(a), np.empty_like(a)
+    squares.light(a, light)
+    assert calls == [7] and not squares.is_compiled and squares.python_seconds > 0.0
+    monkeypatch.setattr(jit, "PYTHON_BUDGET", 0.0)
+    squares.light(a, compiled)
+    assert calls == [7] and squares.is_compiled        # the budget spent: compiled
+    np.testing.assert_array_equal(light, compiled)
+
+
 def test_a_call_compiles_and_sized_calls_choose_by_work():
     few = _fresh(_sum_of_twice)
     assert few.sized(3, np.arange(3.0), few=3) == 6.0

@@ -15,6 +15,9 @@ as Python costs microseconds to milliseconds for one configuration or one target
   compiled.
 - ``kernel.sized(items, *args, few=FEW)`` is light for at most `few` items of work
   (configurations, targets, samples: the caller knows what one costs), compiled for more.
+- A kernel whose loops would be slow as Python can name a vectorised NumPy function that does
+  the same arithmetic in the same order (``kernel(python=...)``): its light calls run that
+  instead, under the same budget.
 
 A process whose light calls never add up to the budget compiles none of them and never imports
 numba; one that makes many of them pays at most the budget before compiling, as it would have
@@ -89,16 +92,19 @@ class Kernel:
     Attributes
     ----------
     py_func : function
-        The function as written, run by the Python tier.
+        The function as written, run by the Python tier inside another kernel's Python run.
+    python : function
+        What light calls run as Python: `py_func`, or the NumPy version given to `kernel`.
     options : dict
         `numba.njit`'s options.
     python_seconds : float
         Time its light calls have spent in Python so far (s).
     """
 
-    def __init__(self, function, options: dict):
+    def __init__(self, function, options: dict, python=None):
         functools.update_wrapper(self, function)
         self.py_func = function
+        self.python = python or function
         self.options = options
         self.python_seconds = 0.0
         self._dispatcher = None
@@ -136,7 +142,7 @@ class Kernel:
         _tier.python = True
         try:
             with np.errstate(all="ignore"):
-                return self.py_func(*args)
+                return self.python(*args)
         except _PYTHON_ERRORS:
             pass
         finally:
@@ -193,9 +199,10 @@ def _named(module: str, qualname: str) -> Kernel:
     return getattr(importlib.import_module(module), qualname)
 
 
-def kernel(**options):
-    """Decorator: a `Kernel` of the function, compiled with ``numba.njit(**options)``."""
-    return lambda function: Kernel(function, options)
+def kernel(python=None, **options):
+    """Decorator: a `Kernel` of the function, compiled with ``numba.njit(**options)``; light
+    calls run `python` (a NumPy version of the same arithmetic) if given, else the function."""
+    return lambda function: Kernel(function, options, python)
 
 
 def _typeof_kernel(value: Kernel, context):

@@ -11,7 +11,7 @@ from scipy.interpolate import CubicSpline, make_interp_spline
 
 import armkit
 from armkit.errors import InputError
-from armkit.trajectory import knot_jumps, patterns, spline
+from armkit.trajectory import knot_jumps, patterns, spline, splines
 
 # Paper 4, Table 1 (SPEC.md): knots (s) and joints 2, 3, 5 of tool_changer_6dof (deg).
 TABLE1_T = np.array([0.0, 2.0, 4.0, 5.0])
@@ -118,6 +118,20 @@ def test_cubics_equal_scipys_clamped_cubic_spline():
     s = np.linspace(0, t[-1], 5000)
     for r in range(3):
         np.testing.assert_allclose(ours.evaluate(s, r), reference(s, r), atol=1e-11 * 10**r)
+
+
+@pytest.mark.parametrize("degrees, count", [(3, 6), ("4-5-5", 4), ([5, 7, 4, 6], 5)])
+def test_dense_and_banded_solves_agree(degrees, count, monkeypatch):
+    """Small systems are solved dense and large ones banded (`DENSE_UP_TO`): the same
+    spline to rounding, whether its conditions fix it or leave it to the least jerk."""
+    rng = np.random.default_rng(count)
+    t = np.r_[0.0, np.cumsum(rng.uniform(0.3, 2.0, count - 1))]
+    q = rng.normal(size=(count, 3))
+    dense = spline(t, q, degrees)
+    monkeypatch.setattr(splines, "DENSE_UP_TO", 0)
+    banded = spline(t, q, degrees)
+    np.testing.assert_allclose(dense.coefficients, banded.coefficients, rtol=0,
+                               atol=1e-12 * np.abs(dense.coefficients).max())
 
 
 def test_given_end_values_and_free_ends():

@@ -23,7 +23,7 @@ _pjit = kernel(cache=True, nogil=True, parallel=True)
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
 _CHUNK = 16384              # samples per parallel task
-LIGHT_SAMPLES = 4096        # samples an evaluation runs as Python before its kernel is compiled
+LIGHT_SAMPLES = 4096        # samples an evaluation runs in NumPy before its kernel is compiled
 _BLOCK = 256                # samples of one piece evaluated together
 _RUN = 8                    # shorter runs of samples in one piece go one by one
 
@@ -94,7 +94,21 @@ def _span(breaks, table, t, out, start, stop):
         s = e
 
 
-@_jit
+def evaluate_numpy(breaks, table, t, out):
+    """`evaluate` as NumPy over all samples at once, each value by the same Horner pass (the
+    same bits): what a light evaluation runs instead of the kernel's loops."""
+    piece = np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, breaks.shape[0] - 2)
+    x = (t - breaks[piece])[:, None]
+    nder, K = table.shape[1], table.shape[2]
+    for r in range(nder):
+        top = max(K - 1 - r, 0)
+        value = table[piece, r, top]
+        for k in range(top - 1, -1, -1):
+            value = value * x + table[piece, r, k]
+        out[r] = value
+
+
+@kernel(cache=True, nogil=True, python=evaluate_numpy)
 def evaluate(breaks, table, t, out):
     _span(breaks, table, t, out, 0, t.shape[0])
 
@@ -383,83 +397,156 @@ def profile_pieces(order, times, values, q0, tol):
 # [s_i, s_{i+1}], with x_{i+1} = x_i + 2 ds_i u_i. Stage i's constraints are rows
 # alpha u + beta x <= gamma: joint accelerations q' u + q'' x within +-amax at s_i and, with
 # x_{i+1} put in, at s_{i+1} (toppra's "interpolation" discretisation), and x_{i+1} inside the
-# next controllable set [lo, hi].
+# next controllable set [lo, hi]: the rows (2 ds, 1, hi) and (-2 ds, -1, -lo).
+# The x a stage allows is found by Fourier-Motzkin: u is bounded below by the rows with
+# alpha < 0 and above by those with alpha > 0; a pair (k below, l above) is compatible iff
+# g x <= h, g = beta_k alpha_l - beta_l alpha_k, h = gamma_k alpha_l - gamma_l alpha_k. Only
+# the pairs with a row of the next set depend on the pass: the pairs of joint rows are taken
+# for every stage first (`joint_rows`), and the pass is then linear in the rows.
 
-@_jit
-def _rows(i, dq, ddq, amax, ds, lo_next, hi_next, alpha, beta, gamma):
-    """Fill stage i's rows; returns their count."""
-    n = dq.shape[1]
-    k = 0
-    for j in range(n):
-        a0, b0 = dq[i, j], ddq[i, j]
-        a1, b1 = dq[i + 1, j] + 2.0 * ds * ddq[i + 1, j], ddq[i + 1, j]
-        for a, b in ((a0, b0), (a1, b1)):
-            alpha[k], beta[k], gamma[k] = a, b, amax[j]
-            alpha[k + 1], beta[k + 1], gamma[k + 1] = -a, -b, amax[j]
-            k += 2
-    alpha[k], beta[k], gamma[k] = 2.0 * ds, 1.0, hi_next
-    alpha[k + 1], beta[k + 1], gamma[k + 1] = -2.0 * ds, -1.0, -lo_next
-    return k + 2
+def joint_rows(dq, ddq, amax, ds, xv):
+    """Each stage's joint-acceleration rows, and the x their pairs alone allow (NumPy).
 
+    Parameters
+    ----------
+    dq, ddq : (N + 1, n) arrays
+        q'(s) and q''(s) at the grid points.
+    amax : (n,) array
+        Joint acceleration limits.
+    ds : (N,) array
+        Grid steps.
+    xv : (N + 1,) array
+        Bound on x at each grid point from the velocity limits (inf where there is none).
 
-@_jit
-def _x_range(count, alpha, beta, gamma, x_top):
-    """Smallest and largest x in [0, x_top] for which some u meets every row (Fourier-Motzkin).
-
-    u is bounded above by rows with alpha > 0 and below by rows with alpha < 0; a pair (k
-    below, l above) is compatible iff (beta_k alpha_l - beta_l alpha_k) x <= gamma_k alpha_l -
-    gamma_l alpha_k. Rows with alpha = 0 bound x directly. Empty: lo > hi.
+    Returns
+    -------
+    rows : (N, 2, 2 n, 3) array
+        Per stage, the rows (alpha, beta, gamma) that bound u from below (``[:, 0]``,
+        alpha < 0) and from above (``[:, 1]``, alpha > 0), at s_i then s_{i+1}; alpha = 0
+        where q' = 0.
+    allowed : (N, 2) array
+        Per stage, the least and largest x in [0, xv] the joint rows allow; (1, 0) where
+        they allow none.
     """
-    lo, hi = 0.0, x_top
-    for k in range(count):
-        if alpha[k] == 0.0:
-            if beta[k] > 0.0:
-                hi = min(hi, gamma[k] / beta[k])
-            elif beta[k] < 0.0:
-                lo = max(lo, gamma[k] / beta[k])
-            elif gamma[k] < 0.0:
-                return 1.0, 0.0
-        elif alpha[k] < 0.0:
-            for l in range(count):
-                if alpha[l] > 0.0:
-                    g = beta[k] * alpha[l] - beta[l] * alpha[k]
-                    h = gamma[k] * alpha[l] - gamma[l] * alpha[k]
+    a = np.concatenate([dq[:-1], dq[1:] + 2.0 * ds[:, None] * ddq[1:]], axis=1)
+    b = np.concatenate([ddq[:-1], ddq[1:]], axis=1)
+    gamma = np.broadcast_to(np.concatenate([amax, amax]), a.shape)
+    up = np.stack([np.abs(a), np.sign(a) * b, gamma], axis=-1)   # +-(a, b), alpha >= 0
+    rows = np.stack([-up, up], axis=1)
+    rows[:, 0, :, 2] = gamma
+    # Rows with alpha = 0 (q' = 0) bound x directly: b x <= amax and -b x <= amax.
+    flat = (a == 0.0) & (b != 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        hi = np.minimum(xv[:-1], np.where(flat, gamma / np.abs(b), np.inf).min(axis=1))
+        below, above = rows[:, 0, :, None, :], rows[:, 1, None, :, :]
+        g = below[..., 1] * above[..., 0] - above[..., 1] * below[..., 0]
+        h = below[..., 2] * above[..., 0] - above[..., 2] * below[..., 0]
+        pair = (below[..., 0] < 0.0) & (above[..., 0] > 0.0)
+        bound = h / g
+    hi = np.minimum(hi, np.where(pair & (g > 0.0), bound, np.inf).min(axis=(1, 2)))
+    lo = np.maximum(0.0, np.where(pair & (g < 0.0), bound, -np.inf).max(axis=(1, 2)))
+    none = (pair & (g == 0.0) & (h < 0.0)).any(axis=(1, 2))
+    lo[none], hi[none] = 1.0, 0.0
+    return rows, np.column_stack([lo, hi])
+
+
+@_jit
+def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
+    """`joint_rows` as loops, filling `rows` and `allowed` (the compiled tier)."""
+    N, n = ds.shape[0], dq.shape[1]
+    for i in range(N):
+        least, largest, none = 0.0, xv[i], False
+        for k in range(2 * n):
+            j = k % n
+            if k < n:
+                a, b = dq[i, j], ddq[i, j]
+            else:
+                a, b = dq[i + 1, j] + 2.0 * ds[i] * ddq[i + 1, j], ddq[i + 1, j]
+            sign = 1.0 if a > 0.0 else -1.0 if a < 0.0 else 0.0
+            rows[i, 1, k, 0], rows[i, 1, k, 1], rows[i, 1, k, 2] = abs(a), sign * b, amax[j]
+            rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2] = -abs(a), -(sign * b), amax[j]
+            if a == 0.0 and b != 0.0:
+                largest = min(largest, amax[j] / abs(b))
+        for k in range(2 * n):
+            alpha_k, beta_k, gamma_k = rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2]
+            for m in range(2 * n):
+                alpha_l, beta_l, gamma_l = rows[i, 1, m, 0], rows[i, 1, m, 1], rows[i, 1, m, 2]
+                if alpha_k < 0.0 and alpha_l > 0.0:
+                    g = beta_k * alpha_l - beta_l * alpha_k
+                    h = gamma_k * alpha_l - gamma_l * alpha_k
                     if g > 0.0:
-                        hi = min(hi, h / g)
+                        largest = min(largest, h / g)
                     elif g < 0.0:
-                        lo = max(lo, h / g)
+                        least = max(least, h / g)
                     elif h < 0.0:
-                        return 1.0, 0.0
-    return lo, hi
+                        none = True
+        allowed[i, 0], allowed[i, 1] = (1.0, 0.0) if none else (least, largest)
 
 
 @_jit
-def topp(dq, ddq, xv, amax, ds, end_top, free_start, x):
-    """Backward pass (controllable sets), then the greedy forward pass; x is filled.
-
-    The end set is [0, end_top]; the start is x = 0, or with free_start the largest
-    controllable x. Returns -1 on success, else the first grid index where the path cannot be
-    followed.
-    """
-    N = ds.shape[0]
-    rows = 4 * dq.shape[1] + 2
-    alpha, beta, gamma = np.empty(rows), np.empty(rows), np.empty(rows)
+def _pass(rows, allowed, ds, end_top, free_start, x):
+    """Backward pass (controllable sets), then the greedy forward pass; x is filled (see
+    `topp`; `rows` and `allowed` are `joint_rows`'s)."""
+    N, m = ds.shape[0], rows.shape[2]
     lo, hi = np.empty(N + 1), np.empty(N + 1)
     lo[N], hi[N] = 0.0, end_top
     for i in range(N - 1, -1, -1):
-        count = _rows(i, dq, ddq, amax, ds[i], lo[i + 1], hi[i + 1], alpha, beta, gamma)
-        lo[i], hi[i] = _x_range(count, alpha, beta, gamma, xv[i])
-        if lo[i] > hi[i] * (1.0 + 1e-9) + 1e-12:
+        step = 2.0 * ds[i]
+        least, largest = allowed[i, 0], allowed[i, 1]
+        for k in range(m):
+            alpha, beta, gamma = rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2]
+            if alpha < 0.0:                     # with the next set's row (2 ds, 1, hi)
+                g = beta * step - alpha
+                h = gamma * step - hi[i + 1] * alpha
+                if g > 0.0:
+                    largest = min(largest, h / g)
+                elif g < 0.0:
+                    least = max(least, h / g)
+                elif h < 0.0:
+                    return i
+            alpha, beta, gamma = rows[i, 1, k, 0], rows[i, 1, k, 1], rows[i, 1, k, 2]
+            if alpha > 0.0:                     # with the next set's row (-2 ds, -1, -lo)
+                g = -alpha + beta * step
+                h = -lo[i + 1] * alpha + gamma * step
+                if g > 0.0:
+                    largest = min(largest, h / g)
+                elif g < 0.0:
+                    least = max(least, h / g)
+                elif h < 0.0:
+                    return i
+        if least > largest * (1.0 + 1e-9) + 1e-12:
             return i
-        hi[i] = max(hi[i], lo[i])
+        lo[i], hi[i] = least, max(largest, least)
     x[0] = hi[0] if free_start else 0.0
     if lo[0] > x[0] + 1e-12:
         return 0
     for i in range(N):
-        count = _rows(i, dq, ddq, amax, ds[i], lo[i + 1], hi[i + 1], alpha, beta, gamma)
-        u = np.inf
-        for k in range(count):                  # the largest u every row allows
-            if alpha[k] > 0.0:
-                u = min(u, (gamma[k] - beta[k] * x[i]) / alpha[k])
-        x[i + 1] = min(max(x[i] + 2.0 * ds[i] * u, lo[i + 1]), hi[i + 1])
+        step = 2.0 * ds[i]
+        u = (hi[i + 1] - x[i]) / step           # the largest u every row allows
+        for k in range(m):
+            alpha = rows[i, 1, k, 0]
+            if alpha > 0.0:
+                u = min(u, (rows[i, 1, k, 2] - rows[i, 1, k, 1] * x[i]) / alpha)
+        x[i + 1] = min(max(x[i] + step * u, lo[i + 1]), hi[i + 1])
     return -1
+
+
+def _topp_numpy(dq, ddq, xv, amax, ds, end_top, free_start, x):
+    """`topp` for a light call: the joint rows in NumPy, then the pass as Python."""
+    rows, allowed = joint_rows(dq, ddq, amax, ds, xv)
+    return _pass(rows, allowed, ds, end_top, free_start, x)
+
+
+@kernel(cache=True, nogil=True, python=_topp_numpy)
+def topp(dq, ddq, xv, amax, ds, end_top, free_start, x):
+    """Backward pass (controllable sets), then the greedy forward pass; x (N + 1,) is filled.
+
+    dq, ddq (N + 1, n) are q'(s) and q''(s) at the grid points, xv (N + 1,) their velocity
+    bound on x, amax (n,) the joint acceleration limits, ds (N,) the grid steps. The end set
+    is [0, end_top]; the start is x = 0, or with free_start the largest controllable x.
+    Returns -1 on success, else the first grid index where the path cannot be followed.
+    """
+    N, n = ds.shape[0], dq.shape[1]
+    rows, allowed = np.empty((N, 2, 2 * n, 3)), np.empty((N, 2))
+    _joint_rows(dq, ddq, amax, ds, xv, rows, allowed)
+    return _pass(rows, allowed, ds, end_top, free_start, x)

@@ -47,12 +47,12 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import LinAlgError, solve_banded
 
 from armkit.errors import InputError
 from armkit.trajectory.piecewise import Trajectory, falling_factorial
 
 PAPER_PATTERNS = ("3-3-3", "4-5-5", "5-5-5")
+DENSE_UP_TO = 300       # unknowns a system may have for a dense LU (NumPy); scipy's banded above
 Boundary = ArrayLike | str | None
 
 
@@ -284,7 +284,9 @@ class _System:
         ``A a = b`` (H plays no part, and its multipliers would only swamp the residual where
         short segments meet long ones). Unknowns and conditions ordered segment by segment make
         either banded (a condition touches one segment, or two at a knot), so a banded LU with
-        partial pivoting solves it in time linear in the number of segments.
+        partial pivoting solves it in time linear in the number of segments. A system of up
+        to `DENSE_UP_TO` unknowns is solved dense (the same pivots: none can lie outside the
+        band), which takes less than importing scipy.
         """
         rows, cols, vals = A
         U, R, n = int(self.off[-1]), b.shape[0], b.shape[1]
@@ -302,22 +304,19 @@ class _System:
         if R == U:                        # nothing left to choose: A a = b, banded the same way
             row_at, back = _place(keys), _place(unknown_keys)
             i, j, v = row_at[rows], back[cols], vals
-            rhs, size = np.zeros((U, n)), U
+            rhs = np.zeros((U, n))
             rhs[row_at] = b
         else:
             at = _place(np.r_[unknown_keys, keys])
             hr, hc, hv = self.jerk_weights()
             i, j = at[np.r_[hr, U + rows, cols]], at[np.r_[hc, cols, U + rows]]
             v = np.r_[hv, vals, vals]
-            rhs, size = np.zeros((U + R, n)), U + R
+            rhs = np.zeros((U + R, n))
             rhs[at[U:]] = b
             back = at[:U]
-        lower, upper = int(max(0, (i - j).max())), int(max(0, (j - i).max()))
-        banded = np.zeros((lower + upper + 1, size))
-        np.add.at(banded, (upper + i - j, j), v)
         try:
-            x = solve_banded((lower, upper), banded, rhs, check_finite=False)[back]
-        except LinAlgError:
+            x = _solve(i, j, v, rhs)[back]
+        except np.linalg.LinAlgError:
             x = None
         if x is not None:
             residual = np.zeros((R, n))
@@ -338,6 +337,22 @@ class _System:
         use = k[None, :] <= self.deg[:, None]
         index = np.where(use, self.off[:-1, None] + k[None, :], 0)
         return np.where(use[..., None], a[index], 0.0) / self.h[:, None, None] ** k[:, None]
+
+
+def _solve(i: NDArray, j: NDArray, v: NDArray, rhs: NDArray) -> NDArray:
+    """x with M x = rhs (size, n), M the square matrix with the entries v at (i, j) (repeats
+    add up); LinAlgError if it is exactly singular."""
+    size = rhs.shape[0]
+    if size <= DENSE_UP_TO:
+        dense = np.zeros((size, size))
+        np.add.at(dense, (i, j), v)
+        return np.linalg.solve(dense, rhs)
+    from scipy.linalg import solve_banded
+
+    lower, upper = int(max(0, (i - j).max())), int(max(0, (j - i).max()))
+    banded = np.zeros((lower + upper + 1, size))
+    np.add.at(banded, (upper + i - j, j), v)
+    return solve_banded((lower, upper), banded, rhs, check_finite=False)
 
 
 def _place(keys: NDArray) -> NDArray:
