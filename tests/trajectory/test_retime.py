@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 import armkit
 from armkit.errors import InputError
-from armkit.trajectory import retime, spline, waypoint_path
+from armkit.trajectory import Trajectory, retime, spline, waypoint_path
 
 logging.getLogger("toppra").setLevel(logging.ERROR)
 DENSE_RTOL = 1e-6       # limits on a dense sample; the retimer checks 8 samples per interval
@@ -70,6 +70,23 @@ def test_table1_spline_as_a_path_within_the_robots_limits():
     assert tr.duration == pytest.approx(finer.duration, rel=1e-3)     # converged already
     check_limits_and_path(tr, path, vmax, amax)
     assert tr.label == "retimed" and tr.knots.shape == (4,)
+
+
+def test_a_path_still_to_rounding_is_still():
+    """An end velocity solved to 1e-17 instead of 0 is a path at rest there: the same
+    timing, not a slower one from a velocity bound of 1e34."""
+    robot = armkit.robot("tool_changer_6dof")
+    q = np.zeros((4, 6))
+    q[:, [1, 2, 4]] = [[50.4, -180, 130], [43.2, -166, 123], [35, -152, 116], [27, -137, 108]]
+    path = spline([0, 2, 4, 5], robot.q_to_si(q), "3-3-3")
+    c = path.coefficients.copy()
+    c[0, 1] = 0.0                                       # q'(0) = 0 exactly
+    exact = Trajectory(path.breaks, c)
+    noisy = c.copy()
+    noisy[0, 1, 2] = 5.5e-17
+    vmax, amax = robot.velocity_limits, robot.acceleration_limits
+    assert retime(Trajectory(path.breaks, noisy), vmax, amax).duration == \
+        retime(exact, vmax, amax).duration
 
 
 def test_a_velocity_limit_alone_with_a_slow_acceleration_limit():
