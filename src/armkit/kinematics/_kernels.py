@@ -34,6 +34,8 @@ _pjit = kernel(cache=True, nogil=True, parallel=True)
 
 LIGHT_CONFIGURATIONS = 1024     # a batch run as Python before its kernel is compiled (about
 #                                 50 us a configuration: `armkit.jit`)
+LIGHT_POSES = 100_000           # a batch of poses run in NumPy (`poses_numpy`, about 1.5 us a
+#                                 configuration) before its kernel is compiled
 GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: below this, the
 #                     start-up of a second thread costs more than the half batch it takes)
 
@@ -47,17 +49,29 @@ def _start(F, at):
 
 
 @_inline
-def _move(T, kind, value):
-    """T @ Rz(value) for a revolute joint, T @ Tz(value) for a prismatic one."""
+def _turn(T, c, s):
+    """T @ Rz(theta), given c = cos(theta) and s = sin(theta)."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
-    if kind == 0:
-        c, s = math.cos(value), math.sin(value)
-        return (c * r00 + s * r01, c * r01 - s * r00, r02, p0,
-                c * r10 + s * r11, c * r11 - s * r10, r12, p1,
-                c * r20 + s * r21, c * r21 - s * r20, r22, p2)
+    return (c * r00 + s * r01, c * r01 - s * r00, r02, p0,
+            c * r10 + s * r11, c * r11 - s * r10, r12, p1,
+            c * r20 + s * r21, c * r21 - s * r20, r22, p2)
+
+
+@_inline
+def _slide(T, value):
+    """T @ Tz(value)."""
+    r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
     return (r00, r01, r02, p0 + value * r02,
             r10, r11, r12, p1 + value * r12,
             r20, r21, r22, p2 + value * r22)
+
+
+@_inline
+def _move(T, kind, value):
+    """T @ Rz(value) for a revolute joint, T @ Tz(value) for a prismatic one."""
+    if kind == 0:
+        return _turn(T, math.cos(value), math.sin(value))
+    return _slide(T, value)
 
 
 @_inline
@@ -182,7 +196,25 @@ def pose_jacobian_one(q, F, I, out, J):
 
 # --- batch loops: Q (N, n) -> outputs with leading N ------------------------------------------
 
-@_jit
+def poses_numpy(Q, F, I, out):
+    """`poses` over the whole batch at once: `pose_one`'s products in their order on arrays of
+    N, the cosines and sines from `math` as the kernel's (the same bits)."""
+    nj, N = I.shape[0] // 2, Q.shape[0]
+    T = _start(F, 2 * nj)
+    for i in range(nj):
+        value = F[nj + i] * Q[:, I[nj + i]] + F[i]
+        if I[i] == 0:
+            T = _turn(T, np.fromiter(map(math.cos, value), float, N),
+                      np.fromiter(map(math.sin, value), float, N))
+        else:
+            T = _slide(T, value)
+        T = _then(T, F, 2 * nj + 12 + 12 * i)
+    for k in range(12):
+        out[:, k // 4, k % 4] = T[k]
+    out[:, 3] = (0.0, 0.0, 0.0, 1.0)
+
+
+@kernel(cache=True, nogil=True, python=poses_numpy)
 def poses(Q, F, I, out):
     for k in range(Q.shape[0]):
         pose_one(Q[k], F, I, out[k])
@@ -218,13 +250,16 @@ def pose_jacobians_parallel(Q, F, I, out, J):
         pose_jacobian_one(Q[k], F, I, out[k], J[k])
 
 
-def run(serial, parallel, Q: np.ndarray, *args) -> None:
+def run(serial, parallel, Q: np.ndarray, *args, few: int = LIGHT_CONFIGURATIONS) -> None:
     """Call the serial batch loop, or the parallel one on as many threads as the batch's size
-    and the idle cores are worth (`armkit.threads.threads_for`); a few samples run light
-    (`armkit.jit`)."""
+    and the idle cores are worth (`armkit.threads.threads_for`); up to `few` samples run light
+    (`armkit.jit`) while the serial loop is not compiled."""
+    if Q.shape[0] <= few and not serial.is_compiled:
+        serial.light(Q, *args)
+        return
     threads = threads_for(Q.shape[0], GRAIN)
     if threads == 1:
-        serial.sized(Q.shape[0], Q, *args, few=LIGHT_CONFIGURATIONS)
+        serial(Q, *args)
         return
     with numba_threads(threads):
         parallel(Q, *args)

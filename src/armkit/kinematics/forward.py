@@ -48,7 +48,8 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     out = np.empty((flat.shape[0], 4, 4))
-    _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.floats, k.ints, out)
+    _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.floats, k.ints, out,
+                 few=_kernels.LIGHT_POSES)
     return out.reshape(q.shape[:-1] + (4, 4))
 
 
