@@ -11,9 +11,10 @@ to compile for the first IK call, as fast). The batch loops come twice, serial a
 Compilation is lazy (no explicit signatures, which would compile every kernel, the parallel ones
 included, when this module is imported): a call compiles only the kernels it runs, one
 configuration from Python calls a `_one` kernel directly, and a call with little work runs the
-kernels as Python until compiling pays (`armkit.jit`). The small helpers are inlined into their
-callers at numba's IR level, which saves a separate compilation (and cache file) for each of
-them.
+kernels as Python until compiling pays (`armkit.jit`); a batch of poses runs `pose_one`'s
+arithmetic as NumPy over the whole batch instead (`_poses_numpy`). The small helpers are
+inlined into their callers at numba's IR level, which saves a separate compilation (and cache
+file) for each of them.
 
 benchmarks/fk.py measures these against a vectorised NumPy chain, roboticstoolbox's C++ code and
 pinocchio; benchmarks/startup.py measures what the first call costs.
@@ -34,7 +35,7 @@ _pjit = kernel(cache=True, nogil=True, parallel=True)
 
 LIGHT_CONFIGURATIONS = 1024     # a batch run as Python before its kernel is compiled (about
 #                                 50 us a configuration: `armkit.jit`)
-LIGHT_POSES = 100_000           # a batch of poses run in NumPy (`poses_numpy`, about 1.5 us a
+LIGHT_POSES = 100_000           # a batch of poses run in NumPy (`_poses_numpy`, about 1.5 us a
 #                                 configuration) before its kernel is compiled
 GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: below this, the
 #                     start-up of a second thread costs more than the half batch it takes)
@@ -196,7 +197,7 @@ def pose_jacobian_one(q, F, I, out, J):
 
 # --- batch loops: Q (N, n) -> outputs with leading N ------------------------------------------
 
-def poses_numpy(Q, F, I, out):
+def _poses_numpy(Q, F, I, out):
     """`poses` over the whole batch at once: `pose_one`'s products in their order on arrays of
     N, the cosines and sines from `math` as the kernel's (the same bits)."""
     nj, N = I.shape[0] // 2, Q.shape[0]
@@ -214,7 +215,7 @@ def poses_numpy(Q, F, I, out):
     out[:, 3] = (0.0, 0.0, 0.0, 1.0)
 
 
-@kernel(cache=True, nogil=True, python=poses_numpy)
+@kernel(cache=True, nogil=True, python=_poses_numpy)
 def poses(Q, F, I, out):
     for k in range(Q.shape[0]):
         pose_one(Q[k], F, I, out[k])

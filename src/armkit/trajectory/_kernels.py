@@ -2,8 +2,10 @@
 profile timing, and the TOPP-RA passes.
 
 Evaluation comes twice, serial for small batches (no thread start-up) and parallel over chunks
-of samples, as in `armkit.kinematics._kernels`. benchmarks/trajectory.py measures each against
-scipy, ruckig, toppra or a vectorised NumPy version of the same work.
+of samples, as in `armkit.kinematics._kernels`. A light evaluation or retiming (`armkit.jit`)
+runs the same arithmetic as NumPy over all samples or grid stages at once (`_evaluate_numpy`,
+`_topp_numpy`), not the kernels' loops as Python. benchmarks/trajectory.py measures each
+against scipy, ruckig, toppra or a vectorised NumPy version of the same work.
 """
 
 from __future__ import annotations
@@ -94,7 +96,7 @@ def _span(breaks, table, t, out, start, stop):
         s = e
 
 
-def evaluate_numpy(breaks, table, t, out):
+def _evaluate_numpy(breaks, table, t, out):
     """`evaluate` as NumPy over all samples at once, each value by the same Horner pass (the
     same bits): what a light evaluation runs instead of the kernel's loops."""
     piece = np.clip(np.searchsorted(breaks, t, side="right") - 1, 0, breaks.shape[0] - 2)
@@ -108,7 +110,7 @@ def evaluate_numpy(breaks, table, t, out):
         out[r] = value
 
 
-@kernel(cache=True, nogil=True, python=evaluate_numpy)
+@kernel(cache=True, nogil=True, python=_evaluate_numpy)
 def evaluate(breaks, table, t, out):
     _span(breaks, table, t, out, 0, t.shape[0])
 
@@ -402,9 +404,9 @@ def profile_pieces(order, times, values, q0, tol):
 # alpha < 0 and above by those with alpha > 0; a pair (k below, l above) is compatible iff
 # g x <= h, g = beta_k alpha_l - beta_l alpha_k, h = gamma_k alpha_l - gamma_l alpha_k. Only
 # the pairs with a row of the next set depend on the pass: the pairs of joint rows are taken
-# for every stage first (`joint_rows`), and the pass is then linear in the rows.
+# for every stage first (`_joint_rows_numpy`), and the pass is then linear in the rows.
 
-def joint_rows(dq, ddq, amax, ds, xv):
+def _joint_rows_numpy(dq, ddq, amax, ds, xv):
     """Each stage's joint-acceleration rows, and the x their pairs alone allow (NumPy).
 
     Parameters
@@ -452,7 +454,7 @@ def joint_rows(dq, ddq, amax, ds, xv):
 
 @_jit
 def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
-    """`joint_rows` as loops, filling `rows` and `allowed` (the compiled tier)."""
+    """`_joint_rows_numpy` as loops, filling `rows` and `allowed` (the compiled tier)."""
     N, n = ds.shape[0], dq.shape[1]
     for i in range(N):
         least, largest, none = 0.0, xv[i], False
@@ -486,7 +488,7 @@ def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
 @_jit
 def _pass(rows, allowed, ds, end_top, free_start, x):
     """Backward pass (controllable sets), then the greedy forward pass; x is filled (see
-    `topp`; `rows` and `allowed` are `joint_rows`'s)."""
+    `topp`; `rows` and `allowed` are `_joint_rows_numpy`'s)."""
     N, m = ds.shape[0], rows.shape[2]
     lo, hi = np.empty(N + 1), np.empty(N + 1)
     lo[N], hi[N] = 0.0, end_top
@@ -533,7 +535,7 @@ def _pass(rows, allowed, ds, end_top, free_start, x):
 
 def _topp_numpy(dq, ddq, xv, amax, ds, end_top, free_start, x):
     """`topp` for a light call: the joint rows in NumPy, then the pass as Python."""
-    rows, allowed = joint_rows(dq, ddq, amax, ds, xv)
+    rows, allowed = _joint_rows_numpy(dq, ddq, amax, ds, xv)
     return _pass(rows, allowed, ds, end_top, free_start, x)
 
 
