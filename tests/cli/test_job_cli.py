@@ -22,15 +22,23 @@ def armkit(*args: str, cwd: Path | None = None, timeout: float = 300):
                           text=True, timeout=timeout, cwd=cwd)
 
 
-@pytest.mark.parametrize("task", TASKS, ids=[t.name.split(".")[0] for t in TASKS])
-def test_run_every_example_task(task, tmp_path):
-    done = armkit("run", str(task), "--out", str(tmp_path), "--json")
-    assert done.returncode == 0, done.stderr
-    doc = json.loads(done.stdout)
-    assert doc["success"] and doc["reason"] == "ok"
-    assert doc["sent"]["last_accepted"] == len(doc["waypoints"]["q"]) - 1
-    assert doc["position_error"]["m"] <= doc["position_error"]["drive_resolution_m"]
-    assert json.loads((tmp_path / "summary.json").read_text())["success"]
+def test_every_example_task_runs_while_the_others_do(tmp_path):
+    """Each example task as its own `armkit run`, all at once: each job's simulated drive
+    takes a loopback port of its own, and the motions (sent in real time) overlap."""
+    names = [task.name.split(".")[0] for task in TASKS]
+    jobs = {name: subprocess.Popen(
+        [sys.executable, "-m", "armkit", "run", str(task), "--out", str(tmp_path / name),
+         "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        for name, task in zip(names, TASKS)}
+    assert len(jobs) == 5
+    for name, job in jobs.items():
+        out, err = job.communicate(timeout=300)
+        assert job.returncode == 0, f"{name}: {err}"
+        doc = json.loads(out)
+        assert doc["success"] and doc["reason"] == "ok", name
+        assert doc["sent"]["last_accepted"] == len(doc["waypoints"]["q"]) - 1, name
+        assert doc["position_error"]["m"] <= doc["position_error"]["drive_resolution_m"], name
+        assert json.loads((tmp_path / name / "summary.json").read_text())["success"], name
 
 
 class _References(HTMLParser):
