@@ -216,6 +216,8 @@ def test_a_mimic_joint_on_the_chain_moves_with_its_leader(tmp_path):
     # along the turned y (-x).
     T = transform(rotz(np.pi / 2), [-(0.3 - 0.275), 0.65, 0.3])
     np.testing.assert_allclose(armkit.fk(robot, q), T, atol=1e-15)
+    batch = np.array([q, [0.2, 0.53], [-1.0, 0.58]])
+    np.testing.assert_array_equal(armkit.fk(robot, batch), [armkit.fk(robot, c) for c in batch])
     J = armkit.jacobian(robot, q)
     np.testing.assert_allclose(J[:3, 1], [0.5, 1.0, 0.0], atol=1e-15)   # d(finger)/d(slide)
     qd, h = np.array([0.7, -0.2]), 1e-6
