@@ -22,6 +22,7 @@ _jit = kernel(cache=True, nogil=True)
 # NumPy's error model numba leaves out its division-by-zero checks and compiles them faster.
 _profile_jit = kernel(cache=True, nogil=True, error_model="numpy")
 _pjit = kernel(cache=True, nogil=True, parallel=True)
+_inline = kernel(inline="always")
 
 PARALLEL_FROM = 4096        # samples; below this, thread start-up costs more than it saves
 _CHUNK = 16384              # samples per parallel task
@@ -406,6 +407,19 @@ def profile_pieces(order, times, values, q0, tol):
 # the pairs with a row of the next set depend on the pass: the pairs of joint rows are taken
 # for every stage first (`_joint_rows_numpy`), and the pass is then linear in the rows.
 
+@_inline
+def _narrow(least, largest, g, h):
+    """[least, largest] narrowed to the x with g x <= h; below 1 and above 0 (empty) when no x
+    meets it (g = 0, h < 0)."""
+    if g > 0.0:
+        return least, min(largest, h / g)
+    if g < 0.0:
+        return max(least, h / g), largest
+    if h < 0.0:
+        return max(least, 1.0), min(largest, 0.0)
+    return least, largest
+
+
 def _joint_rows_numpy(dq, ddq, amax, ds, xv):
     """Each stage's joint-acceleration rows, and the x their pairs alone allow (NumPy).
 
@@ -427,8 +441,8 @@ def _joint_rows_numpy(dq, ddq, amax, ds, xv):
         alpha < 0) and from above (``[:, 1]``, alpha > 0), at s_i then s_{i+1}; alpha = 0
         where q' = 0.
     allowed : (N, 2) array
-        Per stage, the least and largest x in [0, xv] the joint rows allow; (1, 0) where
-        they allow none.
+        Per stage, the least and largest x in [0, xv] the joint rows allow; least > largest
+        where they allow none.
     """
     a = np.concatenate([dq[:-1], dq[1:] + 2.0 * ds[:, None] * ddq[1:]], axis=1)
     b = np.concatenate([ddq[:-1], ddq[1:]], axis=1)
@@ -448,7 +462,7 @@ def _joint_rows_numpy(dq, ddq, amax, ds, xv):
     hi = np.minimum(hi, np.where(pair & (g > 0.0), bound, np.inf).min(axis=(1, 2)))
     lo = np.maximum(0.0, np.where(pair & (g < 0.0), bound, -np.inf).max(axis=(1, 2)))
     none = (pair & (g == 0.0) & (h < 0.0)).any(axis=(1, 2))
-    lo[none], hi[none] = 1.0, 0.0
+    lo[none], hi[none] = np.maximum(lo[none], 1.0), np.minimum(hi[none], 0.0)
     return rows, np.column_stack([lo, hi])
 
 
@@ -457,7 +471,7 @@ def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
     """`_joint_rows_numpy` as loops, filling `rows` and `allowed` (the compiled tier)."""
     N, n = ds.shape[0], dq.shape[1]
     for i in range(N):
-        least, largest, none = 0.0, xv[i], False
+        least, largest = 0.0, xv[i]
         for k in range(2 * n):
             j = k % n
             if k < n:
@@ -474,15 +488,9 @@ def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
             for m in range(2 * n):
                 alpha_l, beta_l, gamma_l = rows[i, 1, m, 0], rows[i, 1, m, 1], rows[i, 1, m, 2]
                 if alpha_k < 0.0 and alpha_l > 0.0:
-                    g = beta_k * alpha_l - beta_l * alpha_k
-                    h = gamma_k * alpha_l - gamma_l * alpha_k
-                    if g > 0.0:
-                        largest = min(largest, h / g)
-                    elif g < 0.0:
-                        least = max(least, h / g)
-                    elif h < 0.0:
-                        none = True
-        allowed[i, 0], allowed[i, 1] = (1.0, 0.0) if none else (least, largest)
+                    least, largest = _narrow(least, largest, beta_k * alpha_l - beta_l * alpha_k,
+                                             gamma_k * alpha_l - gamma_l * alpha_k)
+        allowed[i, 0], allowed[i, 1] = least, largest
 
 
 @_jit
@@ -498,24 +506,12 @@ def _pass(rows, allowed, ds, end_top, free_start, x):
         for k in range(m):
             alpha, beta, gamma = rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2]
             if alpha < 0.0:                     # with the next set's row (2 ds, 1, hi)
-                g = beta * step - alpha
-                h = gamma * step - hi[i + 1] * alpha
-                if g > 0.0:
-                    largest = min(largest, h / g)
-                elif g < 0.0:
-                    least = max(least, h / g)
-                elif h < 0.0:
-                    return i
+                least, largest = _narrow(least, largest, beta * step - alpha,
+                                         gamma * step - hi[i + 1] * alpha)
             alpha, beta, gamma = rows[i, 1, k, 0], rows[i, 1, k, 1], rows[i, 1, k, 2]
             if alpha > 0.0:                     # with the next set's row (-2 ds, -1, -lo)
-                g = -alpha + beta * step
-                h = -lo[i + 1] * alpha + gamma * step
-                if g > 0.0:
-                    largest = min(largest, h / g)
-                elif g < 0.0:
-                    least = max(least, h / g)
-                elif h < 0.0:
-                    return i
+                least, largest = _narrow(least, largest, -alpha + beta * step,
+                                         -lo[i + 1] * alpha + gamma * step)
         if least > largest * (1.0 + 1e-9) + 1e-12:
             return i
         lo[i], hi[i] = least, max(largest, least)
