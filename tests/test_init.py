@@ -42,10 +42,32 @@ def test_an_unknown_name_is_an_attribute_error():
 
 
 def test_the_command_line_starts_without_the_heavy_dependencies():
-    loaded = modules_after("import armkit.cli")
+    loaded = modules_after("from armkit.cli import app")      # every command registered
+    assert "armkit.cli.calibration" in loaded and "armkit.cli.job" in loaded
     for heavy in ("numba", "scipy", "matplotlib", "plotly", "pymodbus", "dask",
                   "armkit.planning.collision", "armkit.perception.target"):
         assert heavy not in loaded, heavy
+
+
+def test_a_command_loads_only_its_own_module():
+    loaded = modules_after("import sys\nfrom armkit.cli import main\n"
+                           "sys.argv = ['armkit', 'fk', 'ur5', '0', '0', '0', '0', '0', '0']\n"
+                           "try:\n    main()\nexcept SystemExit:\n    pass")
+    assert "armkit.cli.robots" in loaded
+    for other in ("armkit.cli.calibration", "armkit.cli.ik", "armkit.cli.job",
+                  "armkit.cli.trajectory", "armkit.kinematics.ik"):
+        assert other not in loaded, other
+
+
+def test_each_command_is_in_the_module_main_loads_for_it():
+    from armkit.cli import app
+    from armkit.cli.command import COMMAND_MODULES, MODULES
+
+    registered = {info.name or info.callback.__name__: info.callback.__module__
+                  for info in app.registered_commands}
+    assert registered == {name: f"armkit.cli.{module}"
+                          for name, module in COMMAND_MODULES.items()}
+    assert set(COMMAND_MODULES.values()) == set(MODULES)
 
 
 def test_no_exported_name_is_shadowed_by_a_module_of_the_same_name():

@@ -96,7 +96,7 @@ def test_the_real_command_end_to_end():
 def test_help_and_the_package_description_say_what_is_built():
     import tomllib
 
-    from armkit.cli.app import DESCRIPTION
+    from armkit.cli.command import DESCRIPTION
 
     project = tomllib.loads((Path(__file__).resolve().parents[2] / "pyproject.toml").read_text())
     assert project["project"]["description"] == DESCRIPTION

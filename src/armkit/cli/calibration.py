@@ -11,7 +11,7 @@ import typer
 
 import armkit
 from armkit.calibration.handeye import METHODS, handeye
-from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
+from armkit.cli.command import EXIT_FAILED, JsonFlag, app, print_json, stdout
 from armkit.cli.robots import RobotArg
 from armkit.errors import InputError
 from armkit.io.handeye import pose_document, read_handeye_poses, write_handeye_result

@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from armkit.cli.app import EXIT_FAILED, JsonFlag, app, print_json, stdout
+from armkit.cli.command import EXIT_FAILED, JsonFlag, app, print_json, stdout
 from armkit.cli.values import TIMEOUT, number, robot_text
 from armkit.errors import DriveError, InputError
 from armkit.io.waypoints import read_waypoints

@@ -8,7 +8,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from armkit.cli.app import EXIT_FAILED, JsonFlag, SiFlag, app, print_json, stdout
+from armkit.cli.command import EXIT_FAILED, JsonFlag, SiFlag, app, print_json, stdout
 from armkit.cli.robots import RobotArg
 from armkit.cli.values import load_robot, number, parse_numbers
 from armkit.errors import InputError

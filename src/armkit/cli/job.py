@@ -9,7 +9,8 @@ from typing import Annotated
 
 import typer
 
-from armkit.cli.app import EXIT_FAILED, NUMBERS, JsonFlag, app, output_folder, print_json, stdout
+from armkit.cli.command import (EXIT_FAILED, NUMBERS, JsonFlag, app, output_folder,
+                                print_json, stdout)
 from armkit.cli.robots import RobotArg
 from armkit.cli.values import load_robot, number
 

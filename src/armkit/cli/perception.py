@@ -8,7 +8,7 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from armkit.cli.app import EXIT_FAILED, JsonFlag, app, output_folder, print_json, stdout
+from armkit.cli.command import EXIT_FAILED, JsonFlag, app, output_folder, print_json, stdout
 from armkit.errors import InputError
 from armkit.spatial import matrix_to_rpy
 

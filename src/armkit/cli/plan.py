@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from armkit.cli.app import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder, print_json, stdout
+from armkit.cli.command import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder, print_json, stdout
 from armkit.errors import InputError
 from armkit.model import SI
 

@@ -10,7 +10,7 @@ import typer
 from rich.table import Table
 
 import armkit
-from armkit.cli.app import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
+from armkit.cli.command import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
 from armkit.cli.values import load_robot, number
 from armkit.errors import InputError
 from armkit.model import SI, Robot, Units, robot_document

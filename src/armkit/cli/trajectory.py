@@ -16,8 +16,8 @@ import typer
 from rich.table import Table
 
 from armkit import trajectory as tj
-from armkit.cli.app import (EXIT_FAILED, NUMBERS, JsonFlag, SiFlag, app, output_folder,
-                            print_json, stdout)
+from armkit.cli.command import (EXIT_FAILED, NUMBERS, JsonFlag, SiFlag, app, output_folder,
+                                print_json, stdout)
 from armkit.cli.values import COORDINATE, DURATION, LIMIT, number, parse_numbers, robot_text
 from armkit.io.trajectory_cases import LimitExcess, TrajectoryCase, limit_excesses, read_case
 from armkit.model import SI, Robot

@@ -10,7 +10,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 import armkit
-from armkit.cli.app import JsonFlag, SiFlag, app, output_folder, print_json, stderr, stdout
+from armkit.cli.command import JsonFlag, SiFlag, app, output_folder, print_json, stderr, stdout
 from armkit.cli.robots import RobotArg
 from armkit.cli.values import COORDINATE, check_number, load_robot, number
 from armkit.model import SI

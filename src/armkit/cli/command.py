@@ -7,6 +7,7 @@ Every command that prints results takes ``--json``: one JSON document on stdout,
 from __future__ import annotations
 
 import difflib
+import importlib
 import json
 import math
 import re
@@ -157,6 +158,24 @@ app = typer.Typer(cls=_Group, no_args_is_help=True, add_completion=False,
                   pretty_exceptions_enable=False, rich_markup_mode=None,
                   help=DESCRIPTION)
 
+
+@app.callback()
+def _armkit() -> None:
+    # A group even when one module's commands are loaded (`main`): Typer would run a lone
+    # command as the whole program.
+    pass
+
+
+# The modules that register the commands, in the order of `armkit --help`, and the module of
+# each command: `main` loads only the one a command line runs.
+MODULES = ("calibration", "drives", "ik", "job", "perception", "plan", "robots", "trajectory",
+           "workspace")
+COMMAND_MODULES = {"handeye": "calibration", "calibrate": "calibration",
+                   "accuracy": "calibration", "send": "drives", "sim-drive": "drives",
+                   "ik": "ik", "run": "job", "demo": "job", "view": "job",
+                   "detect": "perception", "plan": "plan", "robots": "robots", "show": "robots",
+                   "fk": "robots", "traj": "trajectory", "workspace": "workspace"}
+
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print one JSON document and nothing else.")]
 SiFlag = Annotated[bool, typer.Option("--si", help="Numbers in m and rad, not the file's units.")]
 # Lets "-30" stand as a joint value rather than an unknown option.
@@ -199,6 +218,16 @@ def output_folder(path: Path, name: str = "--out") -> Path:
     return path
 
 
+def load_commands(modules: tuple[str, ...] = MODULES) -> None:
+    """Register the commands of these modules of `armkit.cli` on `app` (importing them)."""
+    for module in modules:
+        importlib.import_module(f"armkit.cli.{module}")
+
+
 def main() -> None:
-    """Entry point of the `armkit` console script."""
+    """Entry point of the `armkit` console script: the module of the command asked for is the
+    only one loaded (every module for help or an unknown command), then the command runs."""
+    asked = next((arg for arg in sys.argv[1:] if not arg.startswith("-")), None)
+    module = COMMAND_MODULES.get(asked)
+    load_commands((module,) if module else MODULES)
     app()
