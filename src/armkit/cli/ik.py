@@ -52,7 +52,8 @@ def ik_command(
     """Joint values that reach a target pose; exit 1 with the reason if none does."""
     model = load_robot(robot)
     u = model.units
-    given = [name for name, v in (("--rpy", rpy), ("--yaw", yaw), ("--pitch", pitch)) if v is not None]
+    given = [name for name, v in (("--rpy", rpy), ("--yaw", yaw), ("--pitch", pitch))
+             if v is not None]
     if len(given) > 1:
         raise InputError(f"{', '.join(given)}: expected one of them, found {len(given)}")
     if pitch is not None:       # the vertical plane through the base axis and the target

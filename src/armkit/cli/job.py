@@ -53,8 +53,8 @@ def _job(task, out: Path, as_json: bool) -> None:
                          f"{u.length} from the target (the drive's resolution allows "
                          f"{u.length_from_si(result.resolution):.4f} {u.length})")
         else:
-            stdout.print(f"[bold red]stopped[/bold red] at {STEP_NAMES.get(result.stopped_at, result.stopped_at)}: "
-                         f"{result.reason}", markup=True)
+            step = STEP_NAMES.get(result.stopped_at, result.stopped_at)
+            stdout.print(f"[bold red]stopped[/bold red] at {step}: {result.reason}", markup=True)
         stdout.print(f"report: {out / 'report.html'}")
     if not result.success:
         raise typer.Exit(EXIT_FAILED)
