@@ -103,7 +103,8 @@ FLOOR = ["-c", "import numpy, typer, rich.console, pydantic, yaml"]
 def run(what: str, cache: str, mode: str = "auto") -> dict[str, float]:
     env = {**os.environ, "NUMBA_CACHE_DIR": cache, "ARMKIT_JIT": mode}
     if what == "command line":
-        return {"call": process_time(COMMAND if mode == "auto" else FLOOR, env), "numba": False}
+        arguments = COMMAND if mode == "auto" else FLOOR
+        return {"call": process_wall_time(arguments, env), "numba": False}
     done = subprocess.run([sys.executable, "-c", CHILD, what], env=env, capture_output=True,
                           text=True)
     if done.returncode:
@@ -111,7 +112,7 @@ def run(what: str, cache: str, mode: str = "auto") -> dict[str, float]:
     return json.loads(done.stdout)
 
 
-def process_time(arguments: list[str], env: dict) -> float:
+def process_wall_time(arguments: list[str], env: dict) -> float:
     """Wall time (s) of a fresh Python process with these arguments, from start to exit."""
     start = time.perf_counter()
     done = subprocess.run([sys.executable, *arguments], env=env, capture_output=True, text=True)

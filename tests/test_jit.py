@@ -130,7 +130,7 @@ def test_modes_are_checked(tmp_path):
     # From the environment: read at the first call that needs it, reported as bad input.
     cases = ((["fk", "ur5", "0", "0", "0", "0", "0", "0"], "ARMKIT_JIT", "fast",
               "armkit: ARMKIT_JIT: expected one of auto, compiled, python, found 'fast'"),
-             (["workspace", "ur5", "-n", "2e5", "--out", str(tmp_path)], "ARMKIT_NUM_THREADS",
+             (["workspace", "ur5", "-n", "1e5", "--out", str(tmp_path)], "ARMKIT_NUM_THREADS",
               "many", "armkit: ARMKIT_NUM_THREADS: expected a whole number of threads >= 1, "
                       "found 'many'"))
     for argv, variable, value, line in cases:

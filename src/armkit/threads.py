@@ -4,8 +4,8 @@ A batch is split over threads only when each thread gets enough samples to pay f
 it, and never over more threads than there are idle cores: on a machine whose cores are busy
 with other work, a second thread waits for a core and makes the batch slower than one thread
 (measured in benchmarks/fk.py). `set_num_threads` (or the environment variable
-``ARMKIT_NUM_THREADS``, read when a batch first chooses its threads: a compiled batch, not a
-light one) sets an upper bound that the load no longer lowers.
+``ARMKIT_NUM_THREADS``, read at the first batch) sets an upper bound that the load no longer
+lowers.
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ def _from_environment() -> int | None:
 
 
 _UNREAD = object()
-# The environment is read when a batch first chooses its threads, where a bad value is
-# reported as the call's InputError.
+# The environment is read at the first batch, where a bad value is reported as the call's
+# InputError.
 _chosen: int | None | object = _UNREAD
 
 

@@ -166,15 +166,14 @@ def _armkit() -> None:
     pass
 
 
-# The modules that register the commands, in the order of `armkit --help`, and the module of
-# each command: `main` loads only the one a command line runs.
-MODULES = ("calibration", "drives", "ik", "job", "perception", "plan", "robots", "trajectory",
-           "workspace")
+# The module of each command (`main` loads only the one a command line runs), and the modules
+# in the order of `armkit --help`.
 COMMAND_MODULES = {"handeye": "calibration", "calibrate": "calibration",
                    "accuracy": "calibration", "send": "drives", "sim-drive": "drives",
                    "ik": "ik", "run": "job", "demo": "job", "view": "job",
                    "detect": "perception", "plan": "plan", "robots": "robots", "show": "robots",
                    "fk": "robots", "traj": "trajectory", "workspace": "workspace"}
+MODULES = tuple(dict.fromkeys(COMMAND_MODULES.values()))
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print one JSON document and nothing else.")]
 SiFlag = Annotated[bool, typer.Option("--si", help="Numbers in m and rad, not the file's units.")]

@@ -254,13 +254,10 @@ def pose_jacobians_parallel(Q, F, I, out, J):
 def run(serial, parallel, Q: np.ndarray, *args, few: int = LIGHT_CONFIGURATIONS) -> None:
     """Call the serial batch loop, or the parallel one on as many threads as the batch's size
     and the idle cores are worth (`armkit.threads.threads_for`); up to `few` samples run light
-    (`armkit.jit`) while the serial loop is not compiled."""
-    if Q.shape[0] <= few and not serial.is_compiled:
-        serial.light(Q, *args)
-        return
+    (`armkit.jit`) while the serial loop is not compiled, whatever the threads."""
     threads = threads_for(Q.shape[0], GRAIN)
-    if threads == 1:
-        serial(Q, *args)
+    if threads == 1 or (Q.shape[0] <= few and not serial.is_compiled):
+        serial.sized(Q.shape[0], Q, *args, few=few)
         return
     with numba_threads(threads):
         parallel(Q, *args)

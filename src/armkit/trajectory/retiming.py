@@ -162,10 +162,12 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
     geo = path.sample(np.r_[np.c_[s[:-1], s[:-1] + ds / 2].ravel(), s[-1]])
     # A q' at the level of rounding (a spline's end velocity solved to 1e-17, not 0) is a
     # path standing still: its velocity bound is none, not a finite one of 1e34.
-    qd = np.where(np.abs(geo.qd) <= 1e-12 * max(np.abs(geo.qd).max(), 1e-300), 0.0, geo.qd)
+    speed = np.abs(geo.qd)
+    speed[speed <= 1e-12 * max(speed.max(), 1e-300)] = 0.0
+    qd = np.where(speed == 0.0, 0.0, geo.qd)
     dq, ddq = np.ascontiguousarray(qd[::2]), np.ascontiguousarray(geo.qdd[::2])
     with np.errstate(divide="ignore"):
-        xv = np.min((V / np.abs(qd)) ** 2, axis=1)           # inf where q' = 0
+        xv = np.min((V / speed) ** 2, axis=1)                # inf where q' = 0
     # x is linear in s between grid points while the bound V^2 / q'^2 bends: where it sags
     # below its chord, x could cross it mid-interval. Lowering both ends by the sag at the
     # midpoint keeps the line under a quadratic bound; the cost is second order in the step.
@@ -181,7 +183,7 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
     # a spline with zero end velocities) ds/dt need not be zero, and the fastest motion leaves
     # and arrives with ds/dt > 0 (near such an end q ~ q'' s^2 / 2, so a constant acceleration
     # needs s ~ t). Fixing ds/dt = 0 there instead costs a time that shrinks only as 1 / grid.
-    still = np.abs(dq[[0, -1]]).max(axis=1) == 0.0
+    still = ~dq[[0, -1]].any(axis=1)
     with np.errstate(divide="ignore"):
         end_top = min(xv[-1], np.min(A / np.abs(ddq[-1]))) if still[1] else 0.0
     x = np.empty(s.shape[0])
