@@ -7,7 +7,7 @@ import pytest
 
 import armkit
 from armkit.errors import InputError
-from armkit.kinematics import _kernels
+from armkit.kinematics import core
 from tests.helpers import random_q
 
 
@@ -25,17 +25,17 @@ def test_leading_shapes_match_single_calls(any_robot, lead):
 
 def test_serial_and_parallel_kernels_agree():
     robot = armkit.robot("panda")
-    Q = random_q(robot, 2 * _kernels.GRAIN + 5)
+    Q = random_q(robot, 2 * core.GRAIN + 5)
     k = robot.chain.kernel
     a, b = np.empty((len(Q), 4, 4)), np.empty((len(Q), 4, 4))
-    _kernels.poses(Q, k.floats, k.ints, a)
-    _kernels.poses_parallel(Q, k.floats, k.ints, b)
+    core.poses(Q, k.floats, k.ints, a)
+    core.poses_parallel(Q, k.floats, k.ints, b)
     np.testing.assert_array_equal(a, b)
 
 
 def test_thread_count_changes_nothing_but_speed():
     robot = armkit.robot("ur5")
-    Q = random_q(robot, 3 * _kernels.GRAIN)
+    Q = random_q(robot, 3 * core.GRAIN)
     try:
         armkit.set_num_threads(1)
         one = armkit.fk(robot, Q), armkit.jacobian(robot, Q)

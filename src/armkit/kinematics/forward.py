@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from armkit.kinematics import _kernels
+from armkit.kinematics import core
 from armkit.model.robot import Robot, joint_array
 
 FLOAT = np.dtype(np.float64)   # the one dtype the one-configuration path hands to the kernels
@@ -43,13 +43,13 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
         # checks finiteness (a non-finite q falls through to joint_array, which says what is
         # wrong).
         out = np.empty((4, 4))
-        if _kernels.pose_one.light(q, k.floats, k.ints, out):
+        if core.pose_one.light(q, k.floats, k.ints, out):
             return out
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     out = np.empty((flat.shape[0], 4, 4))
-    _kernels.run(_kernels.poses, _kernels.poses_parallel, flat, k.floats, k.ints, out,
-                 few=_kernels.LIGHT_POSES)
+    core.run(core.poses, core.poses_parallel, flat, k.floats, k.ints, out,
+                 few=core.LIGHT_POSES)
     return out.reshape(q.shape[:-1] + (4, 4))
 
 
@@ -69,7 +69,7 @@ def joint_frames(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     frames = np.empty((flat.shape[0], n, 4, 4))
     out = np.empty((flat.shape[0], 4, 4))
     k = robot.chain.kernel
-    _kernels.run(_kernels.frames, _kernels.frames_parallel, flat, k.floats, k.ints, frames,
+    core.run(core.frames, core.frames_parallel, flat, k.floats, k.ints, frames,
                  out)
     lead = q.shape[:-1]
     return frames.reshape(lead + (n, 4, 4)), out.reshape(lead + (4, 4))

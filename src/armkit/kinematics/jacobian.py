@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.kinematics import _kernels
+from armkit.kinematics import core
 from armkit.kinematics.forward import FLOAT, joint_frames
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import matrix_to_rpy
@@ -46,13 +46,13 @@ def pose_and_jacobian(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
         # One configuration from Python: straight to the kernel, the chain packed in two
         # arrays (as `fk`); the kernel checks finiteness.
         T, J = np.empty((4, 4)), np.empty((6, q.shape[0]))
-        if _kernels.pose_jacobian_one.light(q, k.floats, k.ints, T, J):
+        if core.pose_jacobian_one.light(q, k.floats, k.ints, T, J):
             return T, J
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     T = np.empty((flat.shape[0], 4, 4))
     J = np.empty((flat.shape[0], 6, robot.n))
-    _kernels.run(_kernels.pose_jacobians, _kernels.pose_jacobians_parallel, flat, k.floats,
+    core.run(core.pose_jacobians, core.pose_jacobians_parallel, flat, k.floats,
                  k.ints, T, J)
     lead = q.shape[:-1]
     return T.reshape(lead + (4, 4)), J.reshape(lead + (6, robot.n))

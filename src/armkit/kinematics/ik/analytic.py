@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.jit import kernel
-from armkit.kinematics import _kernels
+from armkit.kinematics import core
 from armkit.kinematics.ik.task import mask_forms, task_errors_one
 from armkit.model.chain import Chain
 
@@ -402,7 +402,7 @@ def _check(q, T, q_ref, limits, chain, mask, tol, errors, flags, pose):
                 v = _fold(v, limits[0, j], limits[1, j], q_ref[j])
             q[b, j] = v
             inside &= limits[0, j] - 1e-12 <= v <= limits[1, j] + 1e-12
-        _kernels.pose_one(q[b], F, I, pose)
+        core.pose_one(q[b], F, I, pose)
         pe, re = task_errors_one(pose, T, mask)
         errors[b, 0], errors[b, 1] = pe, re
         reached = real and pe < tol[0] and re < tol[1]

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armkit.jit import kernel
-from armkit.kinematics._kernels import pose_jacobian_one
+from armkit.kinematics.core import pose_jacobian_one
 from armkit.kinematics.ik.task import mask_forms, task_errors_one, task_residual
 from armkit.threads import threads_for
 

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.jit import kernel
-from armkit.kinematics import _kernels
+from armkit.kinematics import core
 
 _jit = kernel(cache=True, nogil=True, error_model="numpy")
 
@@ -154,7 +154,7 @@ class SeedBank:
         # one thread, and thread start-up on a busy machine would cost ten times that.
         T = np.empty((samples, 4, 4))
         k = robot.chain.kernel
-        _kernels.poses.light(Q, k.floats, k.ints, T)
+        core.poses.light(Q, k.floats, k.ints, T)
         P = np.ascontiguousarray(T[:, :3, 3])
         G = max(1, round(samples ** (1 / 3)))
         lo = P.min(axis=0)

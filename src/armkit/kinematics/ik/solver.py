@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.kinematics import _kernels
+from armkit.kinematics import core
 from armkit.kinematics.forward import FLOAT
 from armkit.kinematics.ik import analytic, numeric
 from armkit.kinematics.ik.choose import CRITERIA, scores
@@ -570,8 +570,8 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        _kernels.poses.sized(flat.shape[0], flat, k.floats, k.ints, out,
-                             few=_kernels.LIGHT_CONFIGURATIONS)
+        core.poses.sized(flat.shape[0], flat, k.floats, k.ints, out,
+                             few=core.LIGHT_CONFIGURATIONS)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
     def _numeric(self, request: _Request, beyond: NDArray, state: dict) -> None:

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.jit import kernel
-from armkit.kinematics._kernels import LIGHT_CONFIGURATIONS
+from armkit.kinematics.core import LIGHT_CONFIGURATIONS
 from armkit.model.chain import frozen_array
 
 _jit = kernel(cache=True, nogil=True, error_model="numpy")

@@ -1,8 +1,25 @@
-"""numba kernels for the chain's hot paths, one sample per call of a `_one` function.
+"""The kinematic core: the packed chain's layout and the one forward kinematics of armkit.
+
+Everything that needs a pose of a configuration (FK, link frames, Jacobians, IK, the collision
+checker, dynamics) walks the chain with the compiled steps of this module, on one packed form.
 
 A chain reaches the kernels as `KernelChain`: joint i turns about (or slides along) z of the
 frame ``pre @ M_1 @ links[0] @ ... @ links[i-1]``, with M the joint's motion, packed in one
 float and one int array (`KernelChain.floats`, `KernelChain.ints`; F and I in the kernels).
+For ``nj`` moving joints (mimic joints included), the fields are read through the named
+accessors below, never by hand-computed offsets:
+
+=============================  ============================================================
+``joint_count(I)``             nj
+``I[i]`` (`joint_kind`)        0 revolute, 1 prismatic
+``joint_value(q, F, I, nj, i)``  the joint's motion ``scale * q[source] + offset`` (rad or m)
+``pre_at(nj)``                 where the 12 numbers of ``pre`` (3 x 4, row by row) start in F
+``link_at(nj, i)``             where those of link i (joint i's motion to joint i+1's) start
+=============================  ============================================================
+
+A pose travels as 12 scalars (rotation rows and position): `pose_start`, `move` (the joint's
+motion), `then` (a constant link), `store_pose`. A kernel that needs the frames of the chain
+(collision, dynamics) writes its own loop over the joints with these steps.
 `pose_one` and `frames_one` carry a pose as 12 scalars (rotation rows and position) so that the
 whole product stays in registers; `pose_jacobian_one` keeps it in its output's rows (less code
 to compile for the first IK call, as fast). The batch loops come twice, serial and parallel, and
@@ -42,7 +59,50 @@ GRAIN = 4096        # samples worth starting a thread for (benchmarks/fk.py: bel
 
 
 @_inline
-def _start(F, at):
+def joint_count(I):
+    """nj, the moving joints of the packed chain."""
+    return I.shape[0] // 2
+
+
+@_inline
+def joint_kind(I, i):
+    """0 if moving joint i is revolute, 1 if prismatic."""
+    return I[i]
+
+
+@_inline
+def joint_value(q, F, I, nj, i):
+    """Moving joint i's motion at the joint values q: ``scale * q[source] + offset``."""
+    return F[nj + i] * q[I[nj + i]] + F[i]
+
+
+@_inline
+def joint_source(I, nj, i):
+    """The index in q of the value that drives moving joint i (its leader's, for a mimic)."""
+    return I[nj + i]
+
+
+@_inline
+def joint_scale(F, nj, i):
+    """d(motion of moving joint i) / d(its value in q): 1, or a mimic joint's multiplier."""
+    return F[nj + i]
+
+
+@_inline
+def pre_at(nj):
+    """Index in F of ``pre``'s 12 numbers (base to joint 1's motion)."""
+    return 2 * nj
+
+
+@_inline
+def link_at(nj, i):
+    """Index in F of link i's 12 numbers (joint i's motion to joint i+1's; the last ends at the
+    tool)."""
+    return 2 * nj + 12 + 12 * i
+
+
+@_inline
+def pose_start(F, at):
     """The top three rows of the transform at F[at:at + 12] as the 12-scalar pose."""
     return (F[at], F[at + 1], F[at + 2], F[at + 3],
             F[at + 4], F[at + 5], F[at + 6], F[at + 7],
@@ -50,7 +110,7 @@ def _start(F, at):
 
 
 @_inline
-def _turn(T, c, s):
+def turn(T, c, s):
     """T @ Rz(theta), given c = cos(theta) and s = sin(theta)."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
     return (c * r00 + s * r01, c * r01 - s * r00, r02, p0,
@@ -59,7 +119,7 @@ def _turn(T, c, s):
 
 
 @_inline
-def _slide(T, value):
+def slide(T, value):
     """T @ Tz(value)."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
     return (r00, r01, r02, p0 + value * r02,
@@ -68,15 +128,15 @@ def _slide(T, value):
 
 
 @_inline
-def _move(T, kind, value):
+def move(T, kind, value):
     """T @ Rz(value) for a revolute joint, T @ Tz(value) for a prismatic one."""
     if kind == 0:
-        return _turn(T, math.cos(value), math.sin(value))
-    return _slide(T, value)
+        return turn(T, math.cos(value), math.sin(value))
+    return slide(T, value)
 
 
 @_inline
-def _then(T, F, at):
+def then(T, F, at):
     """T @ C for the constant rigid transform C whose top three rows are F[at:at + 12]."""
     r00, r01, r02, p0, r10, r11, r12, p1, r20, r21, r22, p2 = T
     return (r00 * F[at] + r01 * F[at + 4] + r02 * F[at + 8],
@@ -94,7 +154,7 @@ def _then(T, F, at):
 
 
 @_inline
-def _store(T, out):
+def store_pose(T, out):
     """Write the 12-scalar pose T into out (4, 4)."""
     for k in range(12):
         out[k // 4, k % 4] = T[k]
@@ -108,14 +168,14 @@ def _store(T, out):
 def pose_one(q, F, I, out):
     """Tool pose of one configuration q (n,) into out (4, 4); False if q is not finite.
     F, I: the chain packed (`KernelChain.floats`, `KernelChain.ints`)."""
-    nj = I.shape[0] // 2
-    T = _start(F, 2 * nj)
+    nj = joint_count(I)
+    T = pose_start(F, pre_at(nj))
     finite = True
     for i in range(nj):
-        v = q[I[nj + i]]
+        v = joint_value(q, F, I, nj, i)
         finite &= math.isfinite(v)
-        T = _then(_move(T, I[i], F[nj + i] * v + F[i]), F, 2 * nj + 12 + 12 * i)
-    _store(T, out)
+        T = then(move(T, joint_kind(I, i), v), F, link_at(nj, i))
+    store_pose(T, out)
     return finite
 
 
@@ -123,13 +183,13 @@ def pose_one(q, F, I, out):
 def frames_one(q, F, I, joint_frames, out):
     """Joint frames after each motion (n_joints, 4, 4) (z is the joint axis) and the tool
     pose."""
-    nj = I.shape[0] // 2
-    T = _start(F, 2 * nj)
+    nj = joint_count(I)
+    T = pose_start(F, pre_at(nj))
     for i in range(nj):
-        T = _move(T, I[i], F[nj + i] * q[I[nj + i]] + F[i])
-        _store(T, joint_frames[i])
-        T = _then(T, F, 2 * nj + 12 + 12 * i)
-    _store(T, out)
+        T = move(T, joint_kind(I, i), joint_value(q, F, I, nj, i))
+        store_pose(T, joint_frames[i])
+        T = then(T, F, link_at(nj, i))
+    store_pose(T, out)
 
 
 @_jit
@@ -140,10 +200,10 @@ def pose_jacobian_one(q, F, I, out, J):
     z_i the joint axis, o_i a point on it, p the tool origin; a mimic joint's column is added,
     times its multiplier, to its leader's. Returns False if q is not finite.
     """
-    n = I.shape[0] // 2
+    n = joint_count(I)
     coupled = n != J.shape[1]
     for i in range(n):
-        coupled |= I[n + i] != i or F[n + i] != 1.0
+        coupled |= joint_source(I, n, i) != i or joint_scale(F, n, i) != 1.0
     # Joint origins and axes in J's columns (or in scratch, when mimic joints share columns).
     axes = np.empty((6, n)) if coupled else J
     # The running pose is out's top three rows, updated row by row with `_move`'s and `_then`'s
@@ -151,13 +211,12 @@ def pose_jacobian_one(q, F, I, out, J):
     # the 12-scalar form inlines, and this kernel is compiled by the first jacobian and IK call.
     for r in range(3):
         for c in range(4):
-            out[r, c] = F[2 * n + 4 * r + c]
+            out[r, c] = F[pre_at(n) + 4 * r + c]
     finite = True
     for i in range(n):
-        v = q[I[n + i]]
-        finite &= math.isfinite(v)
-        value = F[n + i] * v + F[i]
-        if I[i] == 0:
+        value = joint_value(q, F, I, n, i)
+        finite &= math.isfinite(value)
+        if joint_kind(I, i) == 0:
             c, s = math.cos(value), math.sin(value)
             for r in range(3):
                 a, b = out[r, 0], out[r, 1]
@@ -166,7 +225,7 @@ def pose_jacobian_one(q, F, I, out, J):
         else:
             for r in range(3):
                 out[r, 3] = out[r, 3] + value * out[r, 2]
-        lk = 2 * n + 12 + 12 * i                                        # link i's rows in F
+        lk = link_at(n, i)
         for r in range(3):
             axes[r, i] = out[r, 3]                                      # o_i, for now
             axes[3 + r, i] = out[r, 2]                                  # z_i
@@ -178,7 +237,7 @@ def pose_jacobian_one(q, F, I, out, J):
     px, py, pz = out[0, 3], out[1, 3], out[2, 3]
     for i in range(n):
         zx, zy, zz = axes[3, i], axes[4, i], axes[5, i]
-        if I[i] == 0:
+        if joint_kind(I, i) == 0:
             dx, dy, dz = px - axes[0, i], py - axes[1, i], pz - axes[2, i]
             axes[0, i] = zy * dz - zz * dy
             axes[1, i] = zz * dx - zx * dz
@@ -190,7 +249,7 @@ def pose_jacobian_one(q, F, I, out, J):
         J[:, :] = 0.0
         for i in range(n):
             for r in range(6):
-                J[r, I[n + i]] += F[n + i] * axes[r, i]
+                J[r, joint_source(I, n, i)] += joint_scale(F, n, i) * axes[r, i]
     out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
     return finite
 
@@ -200,16 +259,16 @@ def pose_jacobian_one(q, F, I, out, J):
 def _poses_numpy(Q, F, I, out):
     """`poses` over the whole batch at once: `pose_one`'s products in their order on arrays of
     N, the cosines and sines from `math` as the kernel's (the same bits)."""
-    nj, N = I.shape[0] // 2, Q.shape[0]
-    T = _start(F, 2 * nj)
+    nj, N = joint_count(I), Q.shape[0]
+    T = pose_start(F, pre_at(nj))
     for i in range(nj):
-        value = F[nj + i] * Q[:, I[nj + i]] + F[i]
-        if I[i] == 0:
-            T = _turn(T, np.fromiter(map(math.cos, value), float, N),
+        value = joint_scale(F, nj, i) * Q[:, joint_source(I, nj, i)] + F[i]
+        if joint_kind(I, i) == 0:
+            T = turn(T, np.fromiter(map(math.cos, value), float, N),
                       np.fromiter(map(math.sin, value), float, N))
         else:
-            T = _slide(T, value)
-        T = _then(T, F, 2 * nj + 12 + 12 * i)
+            T = slide(T, value)
+        T = then(T, F, link_at(nj, i))
     for k in range(12):
         out[:, k // 4, k % 4] = T[k]
     out[:, 3] = (0.0, 0.0, 0.0, 1.0)
