@@ -27,7 +27,7 @@ _HOMES = {
                      "min_singular_value", "condition_number"), "armkit.kinematics.jacobian"),
     **dict.fromkeys(("ik", "ik_solutions", "IKResult", "IKSolutions", "IKSolver", "IKTrack"),
                     "armkit.kinematics.ik"),
-    **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.model.files"),
+    **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.io.robot_files"),
     "Robot": "armkit.model.robot",
     **dict.fromkeys(("Trajectory", "cubic", "quintic", "jerk_limited", "trapezoidal", "retime",
                      "spline", "tool_motion", "RetimeResult"), "armkit.trajectory"),
@@ -57,7 +57,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,
                                             jacobian_dot, manipulability, min_singular_value,
                                             singular_values, tool_acceleration, tool_velocity)
-    from armkit.model.files import load_robot, robot, robots, save_robot
+    from armkit.io.robot_files import load_robot, robot, robots, save_robot
     from armkit.model.robot import Robot
     from armkit.sampled_workspace import Section, Workspace, workspace
     from armkit.threads import get_num_threads, set_num_threads

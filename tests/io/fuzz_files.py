@@ -547,7 +547,8 @@ def generate(kind: str, count: int, seed: int, folder: Path) -> list[Case]:
 
 def _load(case: dict):
     import armkit
-    from armkit.model import chain_from_urdf, read_urdf
+    from armkit.io.urdf import read_urdf
+    from armkit.model import chain_from_urdf
     if case["kind"] == "urdf":
         table = read_urdf(case["path"], tip=case["tip"])
         return armkit.Robot("fuzz", chain_from_urdf(table))

@@ -10,7 +10,7 @@ import yaml
 
 import armkit
 from armkit.errors import InputError, ModelFileError
-from armkit.model import load_robot, robot_document, save_robot
+from armkit.io.robot_files import load_robot, robot_document, save_robot
 from tests.helpers import random_q
 
 GOOD = """\

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import armkit
+from armkit.io.urdf import read_urdf
 from armkit.model import (DHRow, DHTable, Limits, Robot, ScrewRow, ScrewTable, chain_from_dh,
-                          chain_from_poe, chain_from_urdf, read_urdf)
+                          chain_from_poe, chain_from_urdf)
 from armkit.spatial import rotx, rotz, transform
 
 from tests.helpers import random_q

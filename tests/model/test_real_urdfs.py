@@ -12,7 +12,8 @@ import pytest
 
 import armkit
 from armkit.errors import ModelFileError
-from armkit.model import chain_from_urdf, read_urdf
+from armkit.io.urdf import read_urdf
+from armkit.model import chain_from_urdf
 
 
 def robot_file(suffix: str) -> str:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import armkit
+import armkit.io.urdf
 from armkit.errors import ModelFileError
 from armkit.spatial import rotz, transform
 
@@ -31,7 +32,7 @@ def tree(tmp_path):
 
 
 def test_chain_to_a_named_tip(tree):
-    robot = armkit.model.chain_from_urdf(armkit.model.read_urdf(tree, tip="hand"))
+    robot = armkit.model.chain_from_urdf(armkit.io.urdf.read_urdf(tree, tip="hand"))
     assert [j.name for j in robot.joints] == ["yaw", "slide"]
     assert robot.lower[0] == -np.inf and robot.upper[1] == 0.5
     assert robot.velocity_limits[1] == 0.2
@@ -48,7 +49,7 @@ def test_several_tips_and_none_named_lists_them(tree):
 
 def test_unknown_tip(tree):
     with pytest.raises(ModelFileError, match="tip: expected a link of the file"):
-        armkit.model.read_urdf(tree, tip="gripper")
+        armkit.io.urdf.read_urdf(tree, tip="gripper")
 
 
 @pytest.mark.parametrize("old, new, words", [
@@ -85,7 +86,7 @@ def test_urdf_mistakes(tmp_path, old, new, words):
     path.write_text(TREE.replace(old, new).replace("</robot>", "</sdf>") if old == "<robot"
                     else TREE.replace(old, new))
     with pytest.raises(ModelFileError) as err:
-        armkit.model.read_urdf(path, tip="hand")
+        armkit.io.urdf.read_urdf(path, tip="hand")
     assert str(err.value).startswith(str(path)) and words in str(err.value), str(err.value)
 
 
@@ -111,7 +112,7 @@ def urdf(tmp_path, text: str, name: str = "bad.urdf"):
 
 def refused(path, words: str, tip: str | None = "hand") -> str:
     with pytest.raises(ModelFileError) as err:
-        armkit.model.read_urdf(path, tip=tip)
+        armkit.io.urdf.read_urdf(path, tip=tip)
     message = str(err.value)
     assert message.startswith(f"{path}: ") and words in message, message
     return message
@@ -194,9 +195,9 @@ def test_joints_off_the_chain_are_ignored(tmp_path):
                         "</robot>").replace(
         '<link name="l1"/>', '<link name="l1"><visual><geometry><mesh filename="package://'
         'nowhere/meshes/l1.stl"/></geometry></visual></link>')
-    table = armkit.model.read_urdf(urdf(tmp_path, text, "tree.urdf"), tip="hand")
+    table = armkit.io.urdf.read_urdf(urdf(tmp_path, text, "tree.urdf"), tip="hand")
     assert [j.name for j in table.joints] == ["yaw", "slide", "hand_mount"]
-    reference = armkit.model.read_urdf(urdf(tmp_path, TREE, "plain.urdf"), tip="hand")
+    reference = armkit.io.urdf.read_urdf(urdf(tmp_path, TREE, "plain.urdf"), tip="hand")
     q = [0.3, 0.1]
     np.testing.assert_array_equal(
         armkit.fk(armkit.Robot("a", armkit.model.chain_from_urdf(table)), q),
@@ -252,7 +253,7 @@ def test_a_mimic_joint_whose_range_excludes_its_leaders_is_refused(tmp_path):
 def test_files_that_are_not_files(tmp_path):
     refused(tmp_path, "expected a regular file, found a directory, device or pipe")
     with pytest.raises(ModelFileError, match="/dev/zero: expected a regular file"):
-        armkit.model.read_urdf("/dev/zero")
+        armkit.io.urdf.read_urdf("/dev/zero")
 
 
 XACRO = """<?xml version="1.0"?>
@@ -275,8 +276,8 @@ XACRO = """<?xml version="1.0"?>
 
 def test_xacro_file_expands_to_the_same_chain(tmp_path, tree):
     path = urdf(tmp_path, XACRO, "tree.urdf.xacro")
-    robot = armkit.model.chain_from_urdf(armkit.model.read_urdf(path, tip="hand"))
-    plain = armkit.model.chain_from_urdf(armkit.model.read_urdf(tree, tip="hand"))
+    robot = armkit.model.chain_from_urdf(armkit.io.urdf.read_urdf(path, tip="hand"))
+    plain = armkit.model.chain_from_urdf(armkit.io.urdf.read_urdf(tree, tip="hand"))
     q = [0.7, 0.2]
     np.testing.assert_allclose(armkit.fk(armkit.Robot("x", robot), q),
                                armkit.fk(armkit.Robot("u", plain), q), atol=1e-15)

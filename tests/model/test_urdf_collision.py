@@ -7,7 +7,7 @@ import pytest
 
 import armkit
 from armkit.errors import ModelFileError
-from armkit.model import read_urdf
+from armkit.io.urdf import read_urdf
 from armkit.spatial import pose_from_xyz_rpy
 from tests.model.urdf_collision_files import ARM, TIP
 

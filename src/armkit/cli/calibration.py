@@ -16,7 +16,8 @@ from armkit.cli.robots import RobotArg
 from armkit.errors import InputError
 from armkit.io.handeye import pose_document, read_handeye_poses, write_handeye_result
 from armkit.io.measurements import read_accuracy, read_measurements, read_pool
-from armkit.model import Units, save_robot
+from armkit.io.robot_files import save_robot
+from armkit.model import Units
 
 
 def _writable(path: Path | None, name: str = "--out") -> Path | None:

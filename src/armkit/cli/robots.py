@@ -13,7 +13,8 @@ import armkit
 from armkit.cli.command import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
 from armkit.cli.values import load_robot, number
 from armkit.errors import InputError
-from armkit.model import SI, Robot, Units, robot_document
+from armkit.io.robot_files import robot_document
+from armkit.model import SI, Robot, Units
 from armkit.model.urdf import URDFTable
 from armkit.spatial import matrix_to_rpy
 

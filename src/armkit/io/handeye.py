@@ -45,7 +45,7 @@ from armkit.calibration.handeye import HandEyeResult
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
 from armkit.kinematics.forward import fk
-from armkit.model.files import robot as load_named_robot
+from armkit.io.robot_files import robot as load_named_robot
 from armkit.model.robot import Units
 from armkit.spatial import invert, matrix_to_rpy, quat_to_matrix, rpy_to_matrix
 

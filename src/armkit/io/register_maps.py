@@ -43,7 +43,7 @@ from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap
 from armkit.errors import ArmkitError, ModelFileError
 from armkit.io.documents import StrictModel, read_text, read_yaml, validated
 from armkit.model import Robot
-from armkit.model.files import robot as load_robot_by_name
+from armkit.io.robot_files import robot as load_robot_by_name
 
 DataType = Literal["int16", "uint16", "int32", "float32"]
 Order = Literal["big", "little"]

@@ -40,7 +40,7 @@ from pydantic import Field
 from armkit.errors import ArmkitError, ModelFileError
 from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
 from armkit.io.scene import Obstacle
-from armkit.model.files import MAX_LENGTH
+from armkit.io.robot_files import MAX_LENGTH
 from armkit.model.robot import Units
 from armkit.spatial import pose_from_xyz_rpy
 
@@ -197,7 +197,7 @@ def load_task(path: str | Path):
 
 
 def _robot(name: str, folder: Path, where: str):
-    from armkit.model.files import robot, robots
+    from armkit.io.robot_files import robot, robots
 
     try:
         if name in robots():

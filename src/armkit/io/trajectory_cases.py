@@ -228,7 +228,7 @@ def read_case(source: str, overrides: dict[str, Any] | None = None) -> Trajector
 
 
 def _robot(name: str, source: str) -> Robot:
-    from armkit.model.files import robot as named_robot
+    from armkit.io.robot_files import robot as named_robot
 
     try:
         return named_robot(name)

@@ -106,7 +106,7 @@ def goals_from_pose(robot: Robot, pose: ArrayLike, *, mask=None, starts: int = 8
 
 def _validity(robot_or_checker, scene, resolution, limits):
     if isinstance(robot_or_checker, str):                   # a built-in name or robot file
-        from armkit.model.files import robot as load
+        from armkit.io.robot_files import robot as load
         robot_or_checker = load(robot_or_checker)
     if isinstance(robot_or_checker, Robot):
         res = 0.005 if resolution is None else resolution

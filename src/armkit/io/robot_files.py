@@ -38,7 +38,8 @@ from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
 from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
 from armkit.model.robot import Robot, Units
-from armkit.model.urdf import URDFTable, chain_from_urdf, read_urdf
+from armkit.io.urdf import read_urdf
+from armkit.model.urdf import URDFTable, chain_from_urdf
 from armkit.spatial import matrix_to_rpy, pose_from_xyz_rpy
 
 Vector3 = Annotated[list[Number], Field(min_length=3, max_length=3)]
