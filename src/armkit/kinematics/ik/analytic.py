@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from armkit.jit import kernel
 from armkit.kinematics import core
-from armkit.kinematics.ik.task import mask_forms, task_errors_one
+from armkit.kinematics.ik.masks import mask_forms, task_errors_one
 from armkit.model.chain import Chain
 
 PARALLEL = 1e-9          # |w_i x w_j| below this: parallel axes

@@ -3,7 +3,7 @@
 Each target is solved by its own iterations inside one numba kernel (``solve_targets``); a
 large batch is split over threads (the kernels release the GIL), a small one runs on the
 calling thread. Per iteration: tool pose and Jacobian (one kernel pass), the task residual and
-its Jacobian (`armkit.kinematics.ik.task.task_residual`), and the step
+its Jacobian (`armkit.kinematics.ik.masks.task_residual`), and the step
 
 - ``newton`` (the inspection-robot paper's method): the least-norm solution of ``A dq = e``,
   taken whole; done when the pose is within the tolerances, stuck when no step is left
@@ -43,7 +43,7 @@ import numpy as np
 
 from armkit.jit import kernel
 from armkit.kinematics.core import pose_jacobian_one
-from armkit.kinematics.ik.task import mask_forms, task_errors_one, task_residual
+from armkit.kinematics.ik.masks import mask_forms, task_errors_one, task_residual
 from armkit.threads import threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster

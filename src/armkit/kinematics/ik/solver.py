@@ -23,7 +23,7 @@ from armkit.kinematics.ik.choose import CRITERIA, scores
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
                                           not_converged)
 from armkit.kinematics.ik.seeds import SeedBank
-from armkit.kinematics.ik.task import MASK_FORMS, NAMED_MASKS, as_mask, mask_name
+from armkit.kinematics.ik.masks import MASK_FORMS, NAMED_MASKS, as_mask, mask_name
 from armkit.kinematics.jacobian import pose_and_jacobian
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
@@ -70,7 +70,7 @@ class IKResult:
     position_error : float or ndarray, (...,)
         m, by forward kinematics of q.
     rotation_error : float or ndarray, (...,)
-        rad, by forward kinematics of q (see `armkit.kinematics.ik.task` for the measure).
+        rad, by forward kinematics of q (see `armkit.kinematics.ik.masks` for the measure).
     iterations : int or ndarray of int, (...,)
         Numeric iterations (0 for a closed form).
     reason : str or ndarray of str, (...,)
@@ -236,7 +236,7 @@ class IKSolver:
     default_mask : ndarray of bool, (6,)
         The task solved when none is given.
     default_name : str
-        Its name (`armkit.kinematics.ik.task.mask_name`).
+        Its name (`armkit.kinematics.ik.masks.mask_name`).
 
     Notes
     -----
@@ -335,7 +335,7 @@ class IKSolver:
             choice (the middle of the limits if omitted; the numeric solver then starts from
             the sampled configurations nearest the target).
         mask : str or 6 flags, optional
-            The task (see `armkit.kinematics.ik.task`): "pose", "position", "position+yaw",
+            The task (see `armkit.kinematics.ik.masks`): "pose", "position", "position+yaw",
             "position+pitch", "position+axis" or flags (x, y, z, rx, ry, rz). Default: the
             task the robot can do exactly (a full pose for six joints or more).
         method : {"auto", "analytic", "lm", "newton"}
