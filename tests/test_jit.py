@@ -1,5 +1,5 @@
-"""armkit.jit: light calls run a kernel's Python function until compiling pays, batches run
-compiled, and both tiers give the same results bit for bit."""
+"""armkit.jit: light calls run a kernel's Python function until a background thread has
+compiled it, batches run compiled, and both tiers give the same results bit for bit."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import os
 import pickle
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pytest
@@ -36,6 +37,18 @@ def _acos(x):
     return math.acos(x)
 
 
+def _exp(x):
+    return math.exp(x)
+
+
+def _log(x):
+    return math.log(x)
+
+
+def _ceil(x):
+    return math.ceil(x)
+
+
 def _squares(a, out):
     for i in prange(a.shape[0]):
         out[i] = a[i] * a[i] + 1.0
@@ -43,8 +56,11 @@ def _squares(a, out):
 
 @pytest.fixture(autouse=True)
 def _auto_mode(monkeypatch):
-    """The default tiers, whatever ARMKIT_JIT the suite runs under."""
+    """The default tiers, whatever ARMKIT_JIT the suite runs under, and a background compiler
+    of the test's own that has not started."""
     monkeypatch.setattr(jit, "mode", "auto")
+    monkeypatch.setattr(jit, "_compiler", jit._Compiler())
+    monkeypatch.setattr(jit._Compiler, "python_seconds", 0.0)
 
 
 def _fresh(function, **options) -> Kernel:
@@ -56,34 +72,59 @@ def test_a_light_call_runs_python_and_compiles_nothing():
     outer = _fresh(_sum_of_twice)
     inner_before = _twice.is_compiled
     assert outer.light(np.arange(4.0)) == 12.0
-    assert not outer.is_compiled
+    assert not outer.is_compiled and not jit._compiler.started
     assert _twice.is_compiled == inner_before        # the kernel it calls ran as Python too
     assert outer.python_seconds > 0.0
 
 
-def test_the_budget_spent_a_light_call_compiles(monkeypatch):
-    monkeypatch.setattr(jit, "PYTHON_BUDGET", 0.0)
+def test_light_calls_past_the_start_compile_in_the_background(monkeypatch):
+    monkeypatch.setattr(jit, "START_AFTER", 0.0)
     outer = _fresh(_sum_of_twice)
-    assert outer.light(np.arange(4.0)) == 12.0
+    assert outer.light(np.arange(4.0)) == 12.0       # answered as Python, queued
+    assert jit._compiler.started
+    assert outer.wait(timeout=600)
     assert outer.is_compiled
     assert outer.light is outer.dispatcher           # later calls go straight to numba
+    assert outer.light(np.arange(3.0)) == 6.0
     assert outer(np.arange(3.0)) == 6.0
+
+
+def test_the_background_thread_compiles_and_no_light_call_does(monkeypatch):
+    """Every compilation runs on the background thread while light calls go on as Python."""
+    monkeypatch.setattr(jit, "START_AFTER", 0.0)
+    threads = []
+    numba = jit._numba()
+    original = numba.core.dispatcher.Dispatcher.compile
+
+    def compile_and_note(self, sig):
+        threads.append(threading.current_thread().name)
+        return original(self, sig)
+
+    monkeypatch.setattr(numba.core.dispatcher.Dispatcher, "compile", compile_and_note)
+    outer = _fresh(_sum_of_twice)
+    results = set()
+    while not outer.is_compiled:
+        results.add(outer.light(np.arange(4.0)))
+    results.add(outer.light(np.arange(4.0)))
+    assert results == {12.0}
+    assert threads and set(threads) == {"armkit-jit"}
 
 
 def _squares_numpy(a, out):
     out[:] = a * a + 1.0
 
 
-def test_a_numpy_version_runs_the_light_calls_under_the_same_budget(monkeypatch):
+def test_a_numpy_version_runs_the_light_calls_until_the_kernel_is_ready(monkeypatch):
     calls = []
     squares = Kernel(_squares, {}, lambda a, out: calls.append(len(a)) or _squares_numpy(a, out))
     a = np.linspace(-1.0, 1.0, 7)
     light, compiled = np.empty_like(a), np.empty_like(a)
     squares.light(a, light)
     assert calls == [7] and not squares.is_compiled and squares.python_seconds > 0.0
-    monkeypatch.setattr(jit, "PYTHON_BUDGET", 0.0)
+    squares.prepare(a, compiled)
+    assert squares.wait(timeout=600)
     squares.light(a, compiled)
-    assert calls == [7] and squares.is_compiled        # the budget spent: compiled
+    assert calls == [7] and squares.is_compiled        # ready: compiled
     np.testing.assert_array_equal(light, compiled)
 
 
@@ -96,13 +137,40 @@ def test_a_call_compiles_and_sized_calls_choose_by_work():
     assert many.is_compiled
 
 
-def test_a_math_error_in_python_is_answered_compiled():
-    """math.acos(1.5) raises in Python; numba answers NaN, and so does the light call."""
+def test_a_math_error_in_python_is_answered_as_numba_answers_it():
+    """math.acos(1.5) raises in Python; numba answers NaN, and so does the Python tier, without
+    compiling; the same for an overflow (inf) and the logarithm of 0 (-inf)."""
     acos = _fresh(_acos, error_model="numpy")
     assert acos.light(0.5) == math.acos(0.5)
-    assert not acos.is_compiled
     assert math.isnan(acos.light(1.5))
-    assert acos.is_compiled
+    assert not acos.is_compiled
+    exp, log = _fresh(_exp), _fresh(_log)
+    assert exp.light(1e3) == math.inf and log.light(0.0) == -math.inf
+    assert math.isnan(log.light(-1.0))
+    assert not (exp.is_compiled or log.is_compiled)
+    assert (acos(1.5), exp(1e3), log(0.0)) == (pytest.approx(math.nan, nan_ok=True), math.inf,
+                                                -math.inf)
+
+
+def test_an_error_numba_would_not_raise_either_is_answered_compiled():
+    ceil = _fresh(_ceil)
+    assert ceil.light(2.5) == 3
+    assert not ceil.is_compiled
+    ceil.light(math.inf)            # Python raises OverflowError; numba answers some integer
+    assert ceil.is_compiled
+
+
+def test_new_argument_types_after_compiling_run_as_python_and_are_queued(monkeypatch):
+    monkeypatch.setattr(jit, "START_AFTER", 0.0)
+    twice = _fresh(_sum_of_twice)
+    twice.prepare(np.arange(3.0))
+    assert twice.wait(timeout=600)
+    assert len(twice.dispatcher.overloads) == 1
+    assert twice.light(np.arange(3, dtype=np.float32)) == 6.0     # no version for float32 yet
+    assert jit._compiler.wait(timeout=600)
+    assert len(twice.dispatcher.overloads) == 2
+    assert twice(np.arange(3, dtype=np.int32)) == 6.0            # a batch: compiled at once
+    assert len(twice.dispatcher.overloads) == 3
 
 
 def test_a_kernel_pickles_by_name():

@@ -656,7 +656,7 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     flags = np.empty((N, K, 4), dtype=np.bool_)
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
-    family.kernel.sized(N, family.geometry, targets, q_ref, family.limits, (k.floats, k.ints),
+    family.kernel.sized(N, family.geometry, targets, q_ref, family.limits, (k.F, k.I),
                         mask_forms(mask).ints, np.array([tol_position, tol_rotation]), q, errors,
                         flags)
     return q, errors, flags

@@ -370,7 +370,7 @@ class KernelArgs:
         """The robot's chain packed (`KernelChain.floats`, `KernelChain.ints`) and its
         `Chain.kernel_limits`: arrays the model computes once."""
         k = robot.chain.kernel
-        return cls((k.floats, k.ints), robot.chain.kernel_limits)
+        return cls((k.F, k.I), robot.chain.kernel_limits)
 
 
 def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tuple:
