@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import hashlib
 import importlib
 import math
 import os
@@ -428,11 +429,59 @@ _numba_lock = threading.Lock()
 
 
 def _numba():
-    """numba, imported on the first compilation, with `_typeof_kernel` registered in it."""
+    """numba, imported on the first compilation, with `_typeof_kernel` and armkit's cache
+    stamps (`_stamp_caches`) registered in it."""
     with _numba_lock:
         import numba
         from numba.extending import typeof_impl
 
         if Kernel not in typeof_impl.registry:
             typeof_impl.register(Kernel)(_typeof_kernel)
+            _stamp_caches()
     return numba
+
+
+def _stamp_caches() -> None:
+    """Key every cached armkit kernel on all of armkit's source, not only its own file.
+
+    numba keys a cached kernel on the file that defines it, but the kernels of one module call
+    and inline kernels of others (every FK step of `armkit.kinematics.core`): after an edit to
+    one of those, a cached caller would go on running the old code. armkit's kernels are looked
+    up by locators (numba's own, in `__pycache__` or NUMBA_CACHE_DIR) whose stamp adds a hash
+    of every armkit source file, so any change to armkit compiles its kernels again. Where
+    numba's caching machinery is not as expected, its own locators stay.
+    """
+    from numba.core import caching
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
+    bases = [getattr(caching, name, None) or getattr(caching, "_" + name, None)
+             for name in ("UserProvidedCacheLocator", "InTreeCacheLocator")]
+    if impl is None or None in bases or not hasattr(impl, "_locator_classes"):
+        return
+    package = os.path.dirname(os.path.abspath(__file__))
+    digest = hashlib.sha256()
+    for folder, subfolders, files in os.walk(package):
+        subfolders.sort()
+        for name in sorted(files):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                digest.update(os.path.relpath(path, package).encode())
+                with open(path, "rb") as file:
+                    digest.update(file.read())
+    stamp = digest.hexdigest()
+
+    def armkit_locator(base):
+        class ArmkitLocator(base):
+            def get_source_stamp(self):
+                return super().get_source_stamp(), stamp
+
+            @classmethod
+            def from_function(cls, py_func, py_file):
+                if not os.path.abspath(py_file).startswith(package + os.sep):
+                    return None
+                return super().from_function(py_func, py_file)
+
+        ArmkitLocator.__name__ = f"Armkit{base.__name__.lstrip('_')}"
+        return ArmkitLocator
+
+    impl._locator_classes = [*map(armkit_locator, bases), *impl._locator_classes]
