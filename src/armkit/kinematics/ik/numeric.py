@@ -36,7 +36,6 @@ call.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,7 +43,7 @@ import numpy as np
 from armkit.jit import kernel
 from armkit.kinematics.core import pose_jacobian_one
 from armkit.kinematics.ik.masks import mask_forms, task_errors_one, task_residual
-from armkit.threads import threads_for
+from armkit.threads import in_ranges, threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
@@ -67,9 +66,7 @@ def thread_count(targets: int, threads: int | None = None) -> int:
     """Threads for a batch of `targets`: one per `TARGETS_PER_THREAD` targets, at most
     `threads` (default: `armkit.threads`' choice, the idle cores or the bound the user set),
     so a small batch, or one on a busy machine, runs on the calling thread."""
-    if threads is None:
-        return threads_for(targets, TARGETS_PER_THREAD)
-    return max(1, min(threads, targets // TARGETS_PER_THREAD))
+    return threads_for(targets, TARGETS_PER_THREAD, threads)
 
 
 # --- kernels ----------------------------------------------------------------------------------
@@ -404,15 +401,8 @@ def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task
             kernel_args.limits, task, (int(max_iter), int(restarts), METHOD_CODES[method],
                                        int(seed), 0, 0.0, int(polish)), q, converged,
             iterations, errors)
-    workers = thread_count(N, threads)
-    if workers == 1:
-        solve_targets(0, N, *args)
-    else:
-        # Interleaved chunks share the work out evenly; the kernel releases the GIL.
-        chunk = max(16, N // (8 * workers))
-        bounds = [(a, min(N, a + chunk)) for a in range(0, N, chunk)]
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(lambda ab: solve_targets(ab[0], ab[1], *args), bounds))
+    in_ranges(lambda first, last: solve_targets(first, last, *args), N,
+              thread_count(N, threads))
     return q, converged, iterations, errors
 
 

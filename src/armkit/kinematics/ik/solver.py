@@ -559,7 +559,8 @@ class IKSolver:
             return state
         C, errors, flags = analytic.candidates(self.robot.chain, family, request.T,
                                                request.q_ref, request.mask,
-                                               request.tol_position, request.tol_rotation)
+                                               request.tol_position, request.tol_rotation,
+                                               self._threads)
         picked = self._pick(C, errors, flags, request.q_ref, request.criterion,
                             request.weights)
         rows, branch, found = np.arange(N), picked[:, 0], picked[:, 1]
@@ -733,7 +734,7 @@ class IKSolver:
         # the target and differ from every earlier valid one (a degenerate subproblem gives
         # one solution twice).
         C, errors, flags = analytic.candidates(self.robot.chain, family, flat, np.zeros((N, n)),
-                                               mask, tol_position, tol_rotation)
+                                               mask, tol_position, tol_rotation, self._threads)
         if lead == ():
             # `compress` on basic-indexed views: NumPy's mixed integer and array indexing
             # (C[0, rows]) costs several times as much for a handful of rows.
