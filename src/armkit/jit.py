@@ -289,7 +289,8 @@ class Kernel:
 
         def unseen_types(*args, **kwargs):
             if _tier.foreground or (mode or _mode()) != "auto" or _tier.python:
-                return compile_for_args(*args, **kwargs)
+                with _compiler_lock():          # one compilation at a time, typing included
+                    return compile_for_args(*args, **kwargs)
             if not self._broken:
                 _compiler.request(self, args)
             return lambda *call: self._run_python(call)
@@ -346,7 +347,8 @@ class _Compiler:
             kernel, args = self.queue.get()
             self._quick_switches()
             try:
-                kernel.dispatcher.compile(tuple(numba.typeof(a) for a in args))
+                with _compiler_lock():
+                    kernel.dispatcher.compile(tuple(numba.typeof(a) for a in args))
             except Exception:       # noqa: BLE001 (a batch call compiles it and says why)
                 kernel._broken = True
                 continue
@@ -381,6 +383,14 @@ def wait_for_background(timeout: float | None = None) -> bool:
     """Wait until the background thread has compiled every kernel queued for it; False if
     `timeout` (s) passed first."""
     return _compiler.wait(timeout)
+
+
+def _compiler_lock():
+    """numba's compiler lock (re-entrant), held around a compilation and the typing of its
+    arguments, so that the background thread and a foreground call never compile at once."""
+    from numba.core.compiler_lock import global_compiler_lock
+
+    return global_compiler_lock
 
 
 def _lock_around_fork(numba) -> None:
@@ -436,6 +446,11 @@ def _numba():
         from numba.extending import typeof_impl
 
         if Kernel not in typeof_impl.registry:
+            # numba loads its extensions at a dispatcher's first compilation, unguarded: done
+            # here, once, before two threads can compile.
+            from numba.core import entrypoints
+
+            entrypoints.init_all()
             typeof_impl.register(Kernel)(_typeof_kernel)
             _stamp_caches()
     return numba
