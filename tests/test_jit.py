@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import multiprocessing
 import os
 import pickle
 import subprocess
@@ -171,6 +172,24 @@ def test_new_argument_types_after_compiling_run_as_python_and_are_queued(monkeyp
     assert len(twice.dispatcher.overloads) == 2
     assert twice(np.arange(3, dtype=np.int32)) == 6.0            # a batch: compiled at once
     assert len(twice.dispatcher.overloads) == 3
+
+
+_forked = Kernel(_sum_of_twice, {"cache": False})
+
+
+def _sum_in_child() -> tuple[float, float]:
+    return _forked.light(np.arange(4.0)), _forked(np.arange(3.0))
+
+
+def test_a_child_forked_while_the_background_thread_works_answers(monkeypatch):
+    """Forked in the middle of the background thread's work (importing numba or compiling),
+    a child answers light and batch calls (as Python where it cannot compile), and the parent
+    goes on to compile."""
+    monkeypatch.setattr(jit, "START_AFTER", 0.0)
+    assert _forked.light(np.arange(4.0)) == 12.0            # queued: the thread starts
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        assert pool.apply(_sum_in_child) == (12.0, 6.0)
+    assert _forked.wait(timeout=600)
 
 
 def test_a_kernel_pickles_by_name():

@@ -39,9 +39,11 @@ The environment variable ``ARMKIT_JIT`` (read at the first light call) or `set_m
 own behaviour; benchmarks of compiled speed use it) or ``python`` (light calls always Python,
 nothing compiled in the background; for debugging a kernel).
 
-A process that forks while the background thread compiles waits for that compilation to end
-first (numba's compiler lock is taken around the fork), so the child never inherits a lock
-held by a thread it does not have.
+A forked child starts a background thread of its own when it needs one. A child forked while
+the background thread was importing numba or compiling has inherited locks held by a thread it
+does not have: it compiles nothing, and runs as Python every kernel it has no compiled code for
+(correct, slower; a multiprocessing "spawn" or "forkserver" context, as Dask uses, has no such
+limit).
 """
 
 from __future__ import annotations
@@ -57,6 +59,7 @@ import sys
 import threading
 import time
 import types
+import weakref
 
 import numpy as np
 
@@ -182,6 +185,7 @@ class Kernel:
         self._queued = False
         self._broken = False        # the background compilation failed: light calls stay Python
         self._tier_func = None      # py_func with numba's math, on first use
+        _kernels.add(self)
 
     def __repr__(self) -> str:
         return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
@@ -192,7 +196,7 @@ class Kernel:
         return _named, (self.py_func.__module__, self.py_func.__qualname__)
 
     def __call__(self, *args):
-        if _tier.python:
+        if _tier.python or (no_compiling and not self._compiled):
             return self._python_tier()(*args)
         if not self._compiled:
             self._switch()
@@ -288,6 +292,8 @@ class Kernel:
         compile_for_args = dispatcher._compile_for_args
 
         def unseen_types(*args, **kwargs):
+            if no_compiling:
+                return lambda *call: self._python_tier()(*call)
             if _tier.foreground or (mode or _mode()) != "auto" or _tier.python:
                 with _compiler_lock():          # one compilation at a time, typing included
                     return compile_for_args(*args, **kwargs)
@@ -306,6 +312,7 @@ class Kernel:
 
 
 _dispatcher_lock = threading.Lock()
+_kernels: weakref.WeakSet = weakref.WeakSet()      # every kernel (for a forked child)
 
 
 class _Compiler:
@@ -318,6 +325,7 @@ class _Compiler:
         self.thread: threading.Thread | None = None
         self.started = False
         self.busy = threading.Event()       # set while there is work queued or running
+        self.working = False                # importing numba or compiling, this moment
         self._lock = threading.Lock()
         self._switch_interval = None
 
@@ -333,11 +341,13 @@ class _Compiler:
 
     def _run(self) -> None:
         self._quick_switches()
+        self.working = True
         try:
             numba = _numba()
         except Exception:           # no numba: light calls stay Python, batches say why
             return
-        _lock_around_fork(numba)
+        finally:
+            self.working = False
         while True:
             if self.queue.empty():
                 with self._lock:
@@ -346,12 +356,15 @@ class _Compiler:
                         self._default_switches()
             kernel, args = self.queue.get()
             self._quick_switches()
+            self.working = True
             try:
                 with _compiler_lock():
                     kernel.dispatcher.compile(tuple(numba.typeof(a) for a in args))
             except Exception:       # noqa: BLE001 (a batch call compiles it and says why)
                 kernel._broken = True
                 continue
+            finally:
+                self.working = False
             if not kernel._compiled:
                 kernel._switch()
 
@@ -393,16 +406,6 @@ def _compiler_lock():
     return global_compiler_lock
 
 
-def _lock_around_fork(numba) -> None:
-    """Take numba's compiler lock around a fork, so that a child is never born holding it
-    for a thread it does not have."""
-    from numba.core.compiler_lock import global_compiler_lock
-
-    lock = global_compiler_lock._lock
-    os.register_at_fork(before=lock.acquire, after_in_parent=lock.release,
-                        after_in_child=lock.release)
-
-
 @contextlib.contextmanager
 def numba_threads(count: int):
     """Within the block, parallel kernels called from this thread run on `count` threads (at
@@ -436,6 +439,31 @@ def _typeof_kernel(value: Kernel, context):
 
 
 _numba_lock = threading.Lock()
+
+
+_forked_busy = False            # the background thread was importing numba or compiling
+no_compiling = False            # in a child forked then: nothing is compiled (see the module)
+
+
+def _before_fork() -> None:
+    global _forked_busy
+    _forked_busy = _compiler.working
+
+
+def _after_fork_in_child() -> None:
+    """A forked child has no background thread: it starts its own when its light calls need
+    one, and queues again what the parent had queued and not compiled. Forked while the
+    thread imported numba or compiled, it inherited locks that no thread of its own will
+    release: it compiles nothing, and runs as Python every kernel it has no compiled code for."""
+    global _compiler, no_compiling
+    _compiler = _Compiler()
+    no_compiling = no_compiling or _forked_busy
+    for each in list(_kernels):
+        if not each._compiled:
+            each._queued = no_compiling
+
+
+os.register_at_fork(before=_before_fork, after_in_child=_after_fork_in_child)
 
 
 def _numba():
