@@ -11,7 +11,8 @@ gives the median per-call time in windows of calls (1-10, 11-100, 101-1000, 1001
 worst single call after the first, the first call, when the background thread had compiled
 everything the loop uses (s after the first call), the steady state and the ratio of calls
 101-2000 to it, and a reference library's call on the same inputs measured in the same
-process: pinocchio (fk, jacobian), roboticstoolbox's C++ Levenberg-Marquardt (ik), ruckig
+process: pinocchio (fk, jacobian), roboticstoolbox's C++ Levenberg-Marquardt on a held ``ets``
+(ik, against a held `IKSolver`'s `solve`; ik_solutions is its `solutions`), ruckig
 (jerk_limited). A warm cache is armkit's own cache in __pycache__ (run `armkit warm-up` first);
 an empty one is a new NUMBA_CACHE_DIR, so the background thread compiles from nothing.
 """
@@ -61,10 +62,11 @@ def inputs(case: str, calls: int):
         Q = rng.uniform(*robot.chain.sampling_limits, (calls, robot.n))
         T = armkit.fk(robot, Q)
         Q0 = Q + rng.uniform(-0.05, 0.05, Q.shape)      # near the answer, as a loop is
+        solver = armkit.IKSolver(robot)             # held, as the README says for loops
         if case == "ik_solutions":
-            return (lambda i: armkit.ik_solutions(robot, T[i])), None
+            return (lambda i: solver.solutions(T[i])), None
         ets = rtb_ets(robot)
-        return ((lambda i: armkit.ik(robot, T[i], Q0[i])),
+        return ((lambda i: solver.solve(T[i], Q0[i])),
                 lambda i: ets.ik_LM(T[i], q0=Q0[i], tol=1e-13, joint_limits=True))
     if case == "jerk_limited":
         import ruckig
