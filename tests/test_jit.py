@@ -292,3 +292,66 @@ def test_python_and_compiled_tiers_give_the_same_results():
     assert found["python"].keys() == found["compiled"].keys()
     for key, python in found["python"].items():
         np.testing.assert_array_equal(python, found["compiled"][key], err_msg=key)
+
+
+# A fresh process makes light calls in a loop until the background thread is idle, noting the
+# thread of every compilation numba makes; it prints them and the calls' results compiled.
+LOOP = r"""
+import json, sys, threading
+import numpy as np
+import numba
+import armkit
+from armkit import jit
+
+compiles = []
+original = numba.core.dispatcher.Dispatcher.compile
+
+
+def noted(self, sig):
+    compiles.append(threading.current_thread().name)
+    return original(self, sig)
+
+
+numba.core.dispatcher.Dispatcher.compile = noted
+jit.START_AFTER = 0.0
+cases = sys.argv[1].split(",")
+ur5 = armkit.robot("ur5")
+panda = armkit.robot("panda")
+rng = np.random.default_rng(0)
+q = rng.uniform(*ur5.chain.sampling_limits, (50, 6))
+T = armkit.fk(ur5, q)
+Tp = armkit.fk(panda, rng.uniform(*panda.chain.sampling_limits, (50, 7)))
+calls = {"fk": lambda i: armkit.fk(ur5, q[i]),
+         "jacobian": lambda i: armkit.jacobian(ur5, q[i]),
+         "ik": lambda i: (armkit.ik(ur5, T[i], q[i] + 0.01), armkit.ik(panda, Tp[i])),
+         "ik_solutions": lambda i: armkit.ik_solutions(ur5, T[i]),
+         "jerk_limited": lambda i: armkit.jerk_limited(q[i], q[i - 1], 1.0, 2.0, 10.0),
+         "retime": lambda i: armkit.retime(q[i:i + 4], 1.0, 2.0)}
+i = 0
+while i < 20 or not jit.wait_for_background(timeout=0.0):
+    for case in cases:
+        calls[case](i % 40 + 1)
+    i += 1
+print(json.dumps({"compiles": compiles, "calls": i}))
+"""
+
+
+def _loop_in_a_fresh_process(cases: str) -> dict:
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    result = subprocess.run([sys.executable, "-c", LOOP, cases], capture_output=True,
+                            text=True, timeout=1800, cwd=root)
+    assert result.returncode == 0, result.stderr[-3000:]
+    return json.loads(result.stdout)
+
+
+def test_no_light_call_compiles_in_the_foreground():
+    """A loop of single calls reaches compiled code with every compilation (or cache load) on
+    the background thread: none in the calls themselves."""
+    found = _loop_in_a_fresh_process("fk,jacobian")
+    assert found["compiles"] and set(found["compiles"]) == {"armkit-jit"}, found
+
+
+@pytest.mark.slow
+def test_no_light_call_of_any_kind_compiles_in_the_foreground():
+    found = _loop_in_a_fresh_process("fk,jacobian,ik,ik_solutions,jerk_limited,retime")
+    assert found["compiles"] and set(found["compiles"]) == {"armkit-jit"}, found
