@@ -102,6 +102,9 @@ class IKResult:
         return {name: _plain(getattr(self, name)) for name in self.__dataclass_fields__}
 
 
+_RESULT_FIELDS = tuple(IKResult.__dataclass_fields__)
+
+
 @dataclass(frozen=True)
 class IKSolutions:
     """Every closed-form solution, each reaching its target (checked by forward kinematics).
@@ -147,6 +150,15 @@ class IKTrack:
 
     def to_dict(self) -> dict:
         return {name: _plain(getattr(self, name)) for name in self.__dataclass_fields__}
+
+
+def _one_result(*fields) -> IKResult:
+    """An IKResult of one target from its fields in order, already the right types: what the
+    dataclass's own __init__ does, without its nine frozen-attribute writes (a single call's
+    result is built in a fraction of a microsecond)."""
+    result = object.__new__(IKResult)
+    result.__dict__.update(zip(_RESULT_FIELDS, fields))
+    return result
 
 
 def _pose_fast(target) -> tuple[NDArray, list] | None:
@@ -273,7 +285,8 @@ class IKSolver:
         self.__dict__.update(
             robot=robot, family=family, default_mask=forms.flags, default_name=forms.name,
             _reach_point=None, _kernel_args=None, _samples=int(samples), _seed=int(seed),
-            _threads=threads, _bank=None, _middle=None, _pick_bounds=None)
+            _threads=threads, _bank=None, _middle=None, _pick_bounds=None,
+            _one_shape=(robot.n,))
 
     def __setattr__(self, name, value):
         raise AttributeError(f"IKSolver is immutable: cannot set {name}")
@@ -370,7 +383,8 @@ class IKSolver:
             Bad shapes or values of the arguments (never for an unreachable target).
         """
         one = _pose_fast(targets)
-        if one is not None and (q0 is None or np.shape(q0) == (self.robot.n,)):
+        if one is not None and (q0 is None or getattr(q0, "shape", None) == self._one_shape
+                                or np.shape(q0) == self._one_shape):
             task_mask = self.default_mask if mask is None else as_mask(mask)
             family = self._family_for(task_mask, method)
             if family is None:
@@ -440,7 +454,7 @@ class IKSolver:
             reason = str(self._numeric_reasons(q, np.zeros(1, bool), mask, int(max_iter),
                                                int(restarts))[0])
         name = self.default_name if mask is self.default_mask else mask_name(mask)
-        return IKResult(success, q[0], pe, re, int(iterations[0]), reason, label, criterion,
+        return _one_result(success, q[0], pe, re, int(iterations[0]), reason, label, criterion,
                         name)
 
     def _solve_one_closed(self, T, values, q0, mask, family, method, criterion, weights,
@@ -464,7 +478,7 @@ class IKSolver:
             return None
         pe, re = errors[0, branch].tolist()
         name = self.default_name if mask is self.default_mask else mask_name(mask)
-        return IKResult(True, C[0, branch], pe, re, 0, OK, f"analytic:{family.name}", criterion,
+        return _one_result(True, C[0, branch], pe, re, 0, OK, f"analytic:{family.name}", criterion,
                         name)
 
     def _start(self, q0) -> NDArray:
