@@ -65,7 +65,8 @@ import numpy as np
 
 from armkit.errors import InputError
 
-START_AFTER = 0.02      # s of light calls run as Python before the background thread starts
+START_AFTER = 0.1       # s of light calls run as Python before the background thread starts
+#                         (a command line that makes a few light calls never imports numba)
 FEW = 16                # items (configurations, targets) a `Kernel.sized` call runs light
 MODES = ("auto", "compiled", "python")
 SWITCH_INTERVAL = 0.0005    # s: the GIL's switch interval while the background thread works,
