@@ -186,7 +186,7 @@ class Kernel:
         self._queued = False
         self._broken = False        # the background compilation failed: light calls stay Python
         self._tier_func = None      # py_func with numba's math, on first use
-        _kernels.add(self)
+        _all_kernels.add(self)
 
     def __repr__(self) -> str:
         return f"<kernel {self.py_func.__module__}.{self.py_func.__qualname__}>"
@@ -313,7 +313,7 @@ class Kernel:
 
 
 _dispatcher_lock = threading.Lock()
-_kernels: weakref.WeakSet = weakref.WeakSet()      # every kernel (for a forked child)
+_all_kernels: weakref.WeakSet = weakref.WeakSet()      # every kernel (for a forked child)
 
 
 class _Compiler:
@@ -459,7 +459,7 @@ def _after_fork_in_child() -> None:
     global _compiler, no_compiling
     _compiler = _Compiler()
     no_compiling = no_compiling or _forked_busy
-    for each in list(_kernels):
+    for each in list(_all_kernels):
         if not each._compiled:
             each._queued = no_compiling
 
