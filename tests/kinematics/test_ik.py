@@ -41,12 +41,18 @@ def assert_solved(robot, result, T, mask=None):
 
 
 @pytest.mark.parametrize("name", sorted(ROBOTS))
-@settings(derandomize=True)     # a fixed set of examples: about one Panda target in 20,000 is
-@given(seed=seeds)              # an honest "did not converge" (see BENCHMARKS.md)
+@given(seed=seeds)
 def test_fk_of_ik_is_the_target(name, seed):
     robot = ROBOTS[name]
     T = armkit.fk(robot, random_q(robot, 20, seed))
-    assert_solved(robot, ik(robot, T), T)
+    result = ik(robot, T)
+    missed = ~result.success    # about one Panda target in 20,000 is an honest "did not converge"
+    assert missed.sum() <= 1    # of its random starts (see BENCHMARKS.md); other starts reach it
+    if missed.any():
+        assert result.reason[missed][0].startswith("did not converge")
+        assert_solved(robot, ik(robot, T[missed], seed=seed + 1), T[missed])
+    kept = ~missed
+    assert_solved(robot, ik(robot, T[kept]) if missed.any() else result, T[kept])
 
 
 @pytest.mark.parametrize("name", sorted(ROBOTS))
