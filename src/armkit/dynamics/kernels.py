@@ -1,0 +1,462 @@
+"""The dynamics kernels, written on the kinematic core (`armkit.kinematics.core`).
+
+Each kernel walks the chain with the core's pose steps (`pose_start`, `move`, `then`) on the
+robot's packed floats D (`armkit.model.inertia.KernelInertia.floats`, which continue the
+chain's F) and ints I, so the link poses are those of the one forward kinematics. The
+recursions run in the base (world) frame, with spatial vectors taken at its origin
+(Featherstone, "Rigid Body Dynamics Algorithms", 2008, ch. 5: the recursive Newton-Euler
+algorithm in absolute coordinates; ch. 6: the composite rigid body algorithm):
+
+- joint i's motion subspace ``S_i = (z_i, p_i x z_i)`` for a revolute joint with axis z_i
+  through p_i, ``(0, z_i)`` for a prismatic one (angular part first);
+- body i's spatial inertia at the origin, from its 10 parameters in joint frame i, rotated
+  and shifted there: mass m, first moment h = m c and rotational inertia I_O;
+- in these coordinates a body's force passes to its parent unchanged, so the backward pass of
+  RNEA is a running sum and the composite inertia of CRBA a sum of parameters.
+
+A mimic joint moves with ``scale * q[source]``: its velocity and acceleration are scaled
+likewise, and its torque (or mass-matrix entries) are added, times the scale, to its
+leader's. Armature adds ``armature * qdd`` per joint value, friction ``viscous * qd +
+coulomb * sign(qd)``.
+
+Vectors travel as 3-tuples of scalars, which numba keeps in registers. The batch loops come
+serial and parallel, run by `armkit.kinematics.core.run`. benchmarks/dynamics.py measures
+these against Pinocchio and roboticstoolbox-python.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from armkit.jit import kernel, prange
+from armkit.kinematics.core import (joint_count, joint_kind, joint_scale, joint_source,
+                                    joint_value, link_at, move, pose_start, pre_at, then)
+
+_jit = kernel(cache=True, nogil=True)
+_inline = kernel(inline="always")
+_pjit = kernel(cache=True, nogil=True, parallel=True)
+
+BODY = 10       # floats per body: m, m c (3), I about the joint frame's origin (xx yy zz xy xz yz)
+
+
+# --- the packed inertias' fields -------------------------------------------------------------
+
+@_inline
+def gravity_at(nj):
+    """Index in D of gravity (3, m/s^2, base frame): right after the chain's floats."""
+    return 14 * nj + 12
+
+
+@_inline
+def body_at(nj, i):
+    """Index in D of body i's 10 parameters (in the kernel's joint frame i)."""
+    return 14 * nj + 15 + BODY * i
+
+
+@_inline
+def armature_at(nj, n, k):
+    """Index in D of joint value k's armature (kg m^2 or kg)."""
+    return 24 * nj + 15 + k
+
+
+@_inline
+def viscous_at(nj, n, k):
+    """Index in D of joint value k's viscous friction coefficient."""
+    return 24 * nj + 15 + n + k
+
+
+@_inline
+def coulomb_at(nj, n, k):
+    """Index in D of joint value k's Coulomb friction."""
+    return 24 * nj + 15 + 2 * n + k
+
+
+# --- small vector algebra on 3-tuples ----------------------------------------------------------
+
+@_inline
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@_inline
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@_inline
+def scaled(a, s):
+    return (a[0] * s, a[1] * s, a[2] * s)
+
+
+@_inline
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@_inline
+def symmetric_times(J, w):
+    """J @ w for the symmetric J given as (xx, yy, zz, xy, xz, yz)."""
+    return (J[0] * w[0] + J[3] * w[1] + J[4] * w[2],
+            J[3] * w[0] + J[1] * w[1] + J[5] * w[2],
+            J[4] * w[0] + J[5] * w[1] + J[2] * w[2])
+
+
+@_inline
+def axis_of(T, kind):
+    """Joint i's motion subspace in the base frame at its origin, (angular, linear), from its
+    frame T after the motion (12-scalar pose, z the axis)."""
+    z = (T[2], T[6], T[10])
+    if kind == 0:
+        return z, cross((T[3], T[7], T[11]), z)
+    return (0.0, 0.0, 0.0), z
+
+
+@_inline
+def body_in_base(T, D, b):
+    """Body parameters at D[b:b + 10] (joint frame T) in the base frame at its origin: mass,
+    first moment h (3,) and rotational inertia I_O as (xx, yy, zz, xy, xz, yz)."""
+    m = D[b]
+    p = (T[3], T[7], T[11])
+    # First moment about p in base axes: R (m c).
+    hy = (T[0] * D[b + 1] + T[1] * D[b + 2] + T[2] * D[b + 3],
+          T[4] * D[b + 1] + T[5] * D[b + 2] + T[6] * D[b + 3],
+          T[8] * D[b + 1] + T[9] * D[b + 2] + T[10] * D[b + 3])
+    # R J R^T, J about p in the joint frame's axes.
+    jxx, jyy, jzz, jxy, jxz, jyz = D[b + 4], D[b + 5], D[b + 6], D[b + 7], D[b + 8], D[b + 9]
+    a00 = T[0] * jxx + T[1] * jxy + T[2] * jxz
+    a01 = T[0] * jxy + T[1] * jyy + T[2] * jyz
+    a02 = T[0] * jxz + T[1] * jyz + T[2] * jzz
+    a10 = T[4] * jxx + T[5] * jxy + T[6] * jxz
+    a11 = T[4] * jxy + T[5] * jyy + T[6] * jyz
+    a12 = T[4] * jxz + T[5] * jyz + T[6] * jzz
+    a20 = T[8] * jxx + T[9] * jxy + T[10] * jxz
+    a21 = T[8] * jxy + T[9] * jyy + T[10] * jyz
+    a22 = T[8] * jxz + T[9] * jyz + T[10] * jzz
+    # Shifted from p to the origin: + m (|p|^2 E - p p^T) + 2 (p . hy) E - (p hy^T + hy p^T).
+    pp = dot(p, p)
+    ph = dot(p, hy)
+    xx = a00 * T[0] + a01 * T[1] + a02 * T[2] + m * (pp - p[0] * p[0]) + 2 * (ph - p[0] * hy[0])
+    yy = a10 * T[4] + a11 * T[5] + a12 * T[6] + m * (pp - p[1] * p[1]) + 2 * (ph - p[1] * hy[1])
+    zz = a20 * T[8] + a21 * T[9] + a22 * T[10] + m * (pp - p[2] * p[2]) + 2 * (ph - p[2] * hy[2])
+    xy = a00 * T[4] + a01 * T[5] + a02 * T[6] - m * p[0] * p[1] - p[0] * hy[1] - hy[0] * p[1]
+    xz = a00 * T[8] + a01 * T[9] + a02 * T[10] - m * p[0] * p[2] - p[0] * hy[2] - hy[0] * p[2]
+    yz = a10 * T[8] + a11 * T[9] + a12 * T[10] - m * p[1] * p[2] - p[1] * hy[2] - hy[1] * p[2]
+    return m, add(hy, scaled(p, m)), (xx, yy, zz, xy, xz, yz)
+
+
+@_inline
+def inertia_times(m, h, J, w, v):
+    """The spatial inertia (m, h, J) at the origin times the motion (w, v): (J w + h x v,
+    m v - h x w)."""
+    return add(symmetric_times(J, w), cross(h, v)), add(scaled(v, m), cross(w, h))
+
+
+@_inline
+def force_cross(w, v, n, f):
+    """The spatial cross product for forces, (w, v) x* (n, f) = (w x n + v x f, w x f)."""
+    return add(cross(w, n), cross(v, f)), cross(w, f)
+
+
+@_inline
+def read6(row, at):
+    return (row[at], row[at + 1], row[at + 2]), (row[at + 3], row[at + 4], row[at + 5])
+
+
+@_inline
+def write6(row, at, a, b):
+    row[at], row[at + 1], row[at + 2] = a[0], a[1], a[2]
+    row[at + 3], row[at + 4], row[at + 5] = b[0], b[1], b[2]
+
+
+@_inline
+def joint_terms(q, qd, qdd, D, nj, tau):
+    """tau[k] = armature qdd + viscous qd + coulomb sign(qd), per joint value k."""
+    n = q.shape[0]
+    for k in range(n):
+        rate = qd[k]
+        sign = 1.0 if rate > 0.0 else -1.0 if rate < 0.0 else 0.0
+        tau[k] = (D[armature_at(nj, n, k)] * qdd[k] + D[viscous_at(nj, n, k)] * rate
+                  + D[coulomb_at(nj, n, k)] * sign)
+
+
+# --- one configuration ---------------------------------------------------------------------------
+
+@_jit
+def rnea_one(q, qd, qdd, D, I, tau):
+    """Joint torques (n,) of the motion (q, qd, qdd) into tau, gravity and joint terms
+    included (recursive Newton-Euler); False if q, qd or qdd is not finite."""
+    nj = joint_count(I)
+    g = gravity_at(nj)
+    T = pose_start(D, pre_at(nj))
+    w, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    # The base accelerates upward at -gravity: every body then feels its weight.
+    dw, dv = (0.0, 0.0, 0.0), (-D[g], -D[g + 1], -D[g + 2])
+    work = np.empty((nj, 12))
+    finite = True
+    for i in range(nj):
+        value = joint_value(q, D, I, nj, i)
+        finite &= math.isfinite(value)
+        T = move(T, joint_kind(I, i), value)
+        sw, sv = axis_of(T, joint_kind(I, i))
+        source, scale = joint_source(I, nj, i), joint_scale(D, nj, i)
+        rate, acc = scale * qd[source], scale * qdd[source]
+        finite &= math.isfinite(rate + acc)
+        w, v = add(w, scaled(sw, rate)), add(v, scaled(sv, rate))
+        # d/dt S_i = v_i x S_i (S_i is fixed in body i).
+        dw = add(dw, add(scaled(sw, acc), scaled(cross(w, sw), rate)))
+        dv = add(dv, add(scaled(sv, acc), scaled(add(cross(w, sv), cross(v, sw)), rate)))
+        m, h, J = body_in_base(T, D, body_at(nj, i))
+        ln, lf = inertia_times(m, h, J, w, v)             # momentum
+        an, af = inertia_times(m, h, J, dw, dv)
+        cn, cf = force_cross(w, v, ln, lf)
+        write6(work[i], 0, sw, sv)
+        write6(work[i], 6, add(an, cn), add(af, cf))
+        T = then(T, D, link_at(nj, i))
+    joint_terms(q, qd, qdd, D, nj, tau)
+    fn, ff = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    for i in range(nj - 1, -1, -1):
+        sw, sv = read6(work[i], 0)
+        bn, bf = read6(work[i], 6)
+        fn, ff = add(fn, bn), add(ff, bf)
+        tau[joint_source(I, nj, i)] += joint_scale(D, nj, i) * (dot(sw, fn) + dot(sv, ff))
+    return finite
+
+
+@_jit
+def mass_one(q, D, I, M):
+    """Joint-space mass matrix (n, n) at q into M, armature included (composite rigid body
+    algorithm); False if q is not finite."""
+    nj = joint_count(I)
+    n = q.shape[0]
+    T = pose_start(D, pre_at(nj))
+    axes = np.empty((nj, 6))
+    bodies = np.empty((nj, 10))
+    finite = True
+    for i in range(nj):
+        value = joint_value(q, D, I, nj, i)
+        finite &= math.isfinite(value)
+        T = move(T, joint_kind(I, i), value)
+        sw, sv = axis_of(T, joint_kind(I, i))
+        write6(axes[i], 0, sw, sv)
+        m, h, J = body_in_base(T, D, body_at(nj, i))
+        row = bodies[i]
+        row[0], row[1], row[2], row[3] = m, h[0], h[1], h[2]
+        for k in range(6):
+            row[4 + k] = J[k]
+        T = then(T, D, link_at(nj, i))
+    for a in range(n):
+        for b in range(n):
+            M[a, b] = 0.0
+        M[a, a] = D[armature_at(nj, n, a)]
+    # Composite inertia of bodies j..nj-1, summed from the tip: in base coordinates a sum of
+    # parameters. M_ij = S_i . (Ic_j S_j) for i <= j.
+    c = np.zeros(10)
+    for j in range(nj - 1, -1, -1):
+        for k in range(10):
+            c[k] += bodies[j, k]
+        sw, sv = read6(axes[j], 0)
+        fn, ff = inertia_times(c[0], (c[1], c[2], c[3]), (c[4], c[5], c[6], c[7], c[8], c[9]),
+                               sw, sv)
+        b, sj = joint_source(I, nj, j), joint_scale(D, nj, j)
+        for i in range(j + 1):
+            aw, av = read6(axes[i], 0)
+            value = joint_scale(D, nj, i) * sj * (dot(aw, fn) + dot(av, ff))
+            a = joint_source(I, nj, i)
+            M[a, b] += value
+            if i != j:
+                M[b, a] += value
+    return finite
+
+
+@_jit
+def solve_spd(M, x):
+    """Solve M y = x in place (x becomes y) by Cholesky, M (n, n) symmetric positive
+    definite, overwritten by its factor; False if M is not positive definite."""
+    n = x.shape[0]
+    for j in range(n):
+        d = M[j, j]
+        for k in range(j):
+            d -= M[j, k] * M[j, k]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        M[j, j] = d
+        for i in range(j + 1, n):
+            s = M[i, j]
+            for k in range(j):
+                s -= M[i, k] * M[j, k]
+            M[i, j] = s / d
+    for i in range(n):
+        s = x[i]
+        for k in range(i):
+            s -= M[i, k] * x[k]
+        x[i] = s / M[i, i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= M[k, i] * x[k]
+        x[i] = s / M[i, i]
+    return True
+
+
+@_jit
+def forward_one(q, qd, tau, D, I, qdd):
+    """Joint accelerations (n,) under the torques tau into qdd: M(q)^-1 (tau - bias), bias
+    the torques of (q, qd) at rest acceleration; False if q is not finite or M is not
+    positive definite."""
+    n = q.shape[0]
+    M = np.empty((n, n))
+    zero = np.zeros(n)
+    finite = mass_one(q, D, I, M)
+    rnea_one(q, qd, zero, D, I, qdd)
+    for k in range(n):
+        qdd[k] = tau[k] - qdd[k]
+    return solve_spd(M, qdd) and finite
+
+
+@_inline
+def apply_b(m, h, J, w, v, xw, xv, sign):
+    """B x for B = (v x* I - I v x + sign (I v) xbar) / 2, the body term of the Coriolis
+    matrix (sign +1) or its transpose (sign -1): (I v) xbar x = x x* (I v)."""
+    an, af = inertia_times(m, h, J, xw, xv)
+    cn, cf = force_cross(w, v, an, af)                 # v x* (I x)
+    mw, mv = cross(w, xw), add(cross(w, xv), cross(v, xw))
+    dn, df = inertia_times(m, h, J, mw, mv)            # I (v x x)
+    ln, lf = inertia_times(m, h, J, w, v)
+    en, ef = force_cross(xw, xv, ln, lf)               # x x* (I v)
+    return (scaled(add(add(cn, scaled(dn, -1.0)), scaled(en, sign)), 0.5),
+            scaled(add(add(cf, scaled(df, -1.0)), scaled(ef, sign)), 0.5))
+
+
+@_jit
+def coriolis_matrix_one(q, qd, D, I, C):
+    """The Coriolis matrix C (n, n) with C qd the Coriolis and centrifugal torques and
+    dM/dt - 2 C skew-symmetric, into C; False if q is not finite.
+
+    With v_i = J_i qd each body's velocity and I_i its spatial inertia (base frame), C =
+    sum_i J_i^T (I_i dJ_i/dt + B_i J_i), B_i = (v_i x* I_i - I_i v_i x + (I_i v_i) xbar) / 2
+    (Niemeyer and Slotine's body factorisation; Echeandia and Wensing, "Numerical methods to
+    compute the Coriolis matrix and Christoffel symbols for rigid-body systems", 2021). In a
+    serial chain, entry (j, k) sums over the bodies beyond both joints.
+    """
+    nj = joint_count(I)
+    n = q.shape[0]
+    T = pose_start(D, pre_at(nj))
+    w, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    # Per body: S (6), dS/dt (6), velocity (6), inertia (10).
+    work = np.empty((nj, 28))
+    finite = True
+    for i in range(nj):
+        value = joint_value(q, D, I, nj, i)
+        finite &= math.isfinite(value)
+        T = move(T, joint_kind(I, i), value)
+        sw, sv = axis_of(T, joint_kind(I, i))
+        rate = joint_scale(D, nj, i) * qd[joint_source(I, nj, i)]
+        w, v = add(w, scaled(sw, rate)), add(v, scaled(sv, rate))
+        row = work[i]
+        write6(row, 0, sw, sv)
+        write6(row, 6, cross(w, sw), add(cross(w, sv), cross(v, sw)))
+        write6(row, 12, w, v)
+        m, h, J = body_in_base(T, D, body_at(nj, i))
+        row[18], row[19], row[20], row[21] = m, h[0], h[1], h[2]
+        for k in range(6):
+            row[22 + k] = J[k]
+        T = then(T, D, link_at(nj, i))
+    # G_k = Ic_k dS_k + sum_{i >= k} B_i S_k (the column k for rows j <= k);
+    # H_j = (Ic_j S_j, sum_{i >= j} B_i^T S_j) (the row j for columns k < j).
+    G = np.zeros((nj, 6))
+    H = np.zeros((nj, 12))
+    c = np.zeros(10)
+    for k in range(nj - 1, -1, -1):
+        row = work[k]
+        for r in range(10):
+            c[r] += row[18 + r]
+        m, h, J = c[0], (c[1], c[2], c[3]), (c[4], c[5], c[6], c[7], c[8], c[9])
+        sw, sv = read6(row, 0)
+        dw_, dv_ = read6(row, 6)
+        gn, gf = inertia_times(m, h, J, dw_, dv_)
+        hn, hf = inertia_times(m, h, J, sw, sv)
+        tn, tf = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+        for i in range(k, nj):
+            body = work[i]
+            bw, bv = read6(body, 12)
+            bm, bh = body[18], (body[19], body[20], body[21])
+            bJ = (body[22], body[23], body[24], body[25], body[26], body[27])
+            xn, xf = apply_b(bm, bh, bJ, bw, bv, sw, sv, 1.0)
+            gn, gf = add(gn, xn), add(gf, xf)
+            yn, yf = apply_b(bm, bh, bJ, bw, bv, sw, sv, -1.0)
+            tn, tf = add(tn, yn), add(tf, yf)
+        write6(G[k], 0, gn, gf)
+        write6(H[k], 0, hn, hf)
+        write6(H[k], 6, tn, tf)
+    for a in range(n):
+        for b in range(n):
+            C[a, b] = 0.0
+    for j in range(nj):
+        sw, sv = read6(work[j], 0)
+        a, sj = joint_source(I, nj, j), joint_scale(D, nj, j)
+        for k in range(nj):
+            b, sk = joint_source(I, nj, k), joint_scale(D, nj, k)
+            if j <= k:
+                gn, gf = read6(G[k], 0)
+                value = dot(sw, gn) + dot(sv, gf)
+            else:
+                hn, hf = read6(H[j], 0)
+                tn, tf = read6(H[j], 6)
+                dw_, dv_ = read6(work[k], 6)
+                kw, kv = read6(work[k], 0)
+                value = dot(hn, dw_) + dot(hf, dv_) + dot(tn, kw) + dot(tf, kv)
+            C[a, b] += sj * sk * value
+    return finite
+
+
+# --- batch loops: Q (N, n) -> outputs with leading N ---------------------------------------------
+
+@_jit
+def rnea(Q, QD, QDD, D, I, tau):
+    for k in range(Q.shape[0]):
+        rnea_one(Q[k], QD[k], QDD[k], D, I, tau[k])
+
+
+@_pjit
+def rnea_parallel(Q, QD, QDD, D, I, tau):
+    for k in prange(Q.shape[0]):
+        rnea_one(Q[k], QD[k], QDD[k], D, I, tau[k])
+
+
+@_jit
+def mass(Q, D, I, M):
+    for k in range(Q.shape[0]):
+        mass_one(Q[k], D, I, M[k])
+
+
+@_pjit
+def mass_parallel(Q, D, I, M):
+    for k in prange(Q.shape[0]):
+        mass_one(Q[k], D, I, M[k])
+
+
+@_jit
+def forward(Q, QD, TAU, D, I, QDD, ok):
+    for k in range(Q.shape[0]):
+        ok[k] = forward_one(Q[k], QD[k], TAU[k], D, I, QDD[k])
+
+
+@_pjit
+def forward_parallel(Q, QD, TAU, D, I, QDD, ok):
+    for k in prange(Q.shape[0]):
+        ok[k] = forward_one(Q[k], QD[k], TAU[k], D, I, QDD[k])
+
+
+@_jit
+def coriolis(Q, QD, D, I, C):
+    for k in range(Q.shape[0]):
+        coriolis_matrix_one(Q[k], QD[k], D, I, C[k])
+
+
+@_pjit
+def coriolis_parallel(Q, QD, D, I, C):
+    for k in prange(Q.shape[0]):
+        coriolis_matrix_one(Q[k], QD[k], D, I, C[k])
