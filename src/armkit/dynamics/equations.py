@@ -47,14 +47,13 @@ def packed(robot: Robot, gravity: ArrayLike | None = None) -> KernelInertia:
     return d if gravity is None else d.with_gravity(gravity)
 
 
-def _single(robot: Robot, *arrays) -> bool:
-    """Whether every array is one configuration the kernels take as it is."""
-    shape = robot.chain.lower.shape
-    for a in arrays:
-        if not (type(a) is np.ndarray and a.dtype is FLOAT and a.shape == shape
-                and a.flags.c_contiguous):
-            return False
-    return True
+def _single(a, b, c) -> bool:
+    """Whether the three arrays are each of the one type the one-configuration kernels take
+    (C-contiguous float64 vectors); chained comparisons, the cheapest first. The kernels check
+    their lengths (and return False to send a wrong one through the checks that name it)."""
+    return (type(a) is type(b) is type(c) is np.ndarray and a.dtype is b.dtype is c.dtype is FLOAT
+            and a.ndim == b.ndim == c.ndim == 1 and a.flags.c_contiguous
+            and b.flags.c_contiguous and c.flags.c_contiguous)
 
 
 def _batch(robot: Robot, **named: ArrayLike) -> tuple[tuple[int, ...], list[NDArray]]:
@@ -104,7 +103,7 @@ def inverse_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, 
     array([  0.  , -53.78, -15.64,   0.  ,   0.  ,   0.  ])
     """
     d = robot.dynamics
-    if gravity is None and d is not None and _single(robot, q, qd, qdd):
+    if gravity is None and d is not None and _single(q, qd, qdd):
         tau = np.empty(robot.n)
         if kernels.rnea_one.light(q, qd, qdd, d.floats, d.ints, tau):
             return tau
@@ -178,7 +177,7 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray:
     """
     d = robot.dynamics
     n = robot.n
-    if d is not None and _single(robot, q):
+    if d is not None and _single(q, q, q):
         M = np.empty((n, n))
         if kernels.mass_one.light(q, d.floats, d.ints, M):
             return M
@@ -239,7 +238,7 @@ def forward_dynamics(robot: Robot, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, 
         no mass and has no armature), naming the first such configuration.
     """
     d = robot.dynamics
-    if gravity is None and d is not None and _single(robot, q, qd, tau):
+    if gravity is None and d is not None and _single(q, qd, tau):
         qdd = np.empty(robot.n)
         if kernels.forward_one.light(q, qd, tau, d.floats, d.ints, qdd):
             return qdd

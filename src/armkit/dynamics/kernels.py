@@ -44,6 +44,12 @@ BODY = 10       # floats per body: m, m c (3), I about the joint frame's origin 
 # --- the packed inertias' fields -------------------------------------------------------------
 
 @_inline
+def value_count(D, nj):
+    """n, the joint values (D holds 3 floats of armature and friction per value at its end)."""
+    return (D.shape[0] - 24 * nj - 15) // 3
+
+
+@_inline
 def gravity_at(nj):
     """Index in D of gravity (3, m/s^2, base frame): right after the chain's floats."""
     return 14 * nj + 12
@@ -186,8 +192,12 @@ def joint_terms(q, qd, qdd, D, nj, tau):
 @_jit
 def rnea_one(q, qd, qdd, D, I, tau):
     """Joint torques (n,) of the motion (q, qd, qdd) into tau, gravity and joint terms
-    included (recursive Newton-Euler); False if q, qd or qdd is not finite."""
+    included (recursive Newton-Euler); False if q, qd or qdd is not finite or not of the
+    robot's n values (then nothing is computed)."""
     nj = joint_count(I)
+    n = value_count(D, nj)
+    if q.shape[0] != n or qd.shape[0] != n or qdd.shape[0] != n or tau.shape[0] != n:
+        return False
     g = gravity_at(nj)
     T = pose_start(D, pre_at(nj))
     w, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
@@ -227,9 +237,12 @@ def rnea_one(q, qd, qdd, D, I, tau):
 @_jit
 def mass_one(q, D, I, M):
     """Joint-space mass matrix (n, n) at q into M, armature included (composite rigid body
-    algorithm); False if q is not finite."""
+    algorithm); False if q is not finite or not of the robot's n values (then nothing is
+    computed)."""
     nj = joint_count(I)
-    n = q.shape[0]
+    n = value_count(D, nj)
+    if q.shape[0] != n or M.shape[0] != n or M.shape[1] != n:
+        return False
     T = pose_start(D, pre_at(nj))
     axes = np.empty((nj, 6))
     bodies = np.empty((nj, 10))
@@ -305,8 +318,10 @@ def solve_spd(M, x):
 def forward_one(q, qd, tau, D, I, qdd):
     """Joint accelerations (n,) under the torques tau into qdd: M(q)^-1 (tau - bias), bias
     the torques of (q, qd) at rest acceleration; False if q is not finite or M is not
-    positive definite."""
-    n = q.shape[0]
+    positive definite, or an array is not of the robot's n values."""
+    n = value_count(D, joint_count(I))
+    if q.shape[0] != n or qd.shape[0] != n or tau.shape[0] != n or qdd.shape[0] != n:
+        return False
     M = np.empty((n, n))
     zero = np.zeros(n)
     finite = mass_one(q, D, I, M)
