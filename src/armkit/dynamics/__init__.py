@@ -22,6 +22,8 @@ _HOMES = {
     **dict.fromkeys(("inverse_dynamics", "gravity_torques", "coriolis", "mass_matrix",
                      "coriolis_matrix", "forward_dynamics", "with_payload"),
                     "armkit.dynamics.equations"),
+    **dict.fromkeys(("torque_profile", "TorqueProfile", "TorqueLimits"),
+                    "armkit.dynamics.torques"),
     **dict.fromkeys(("Inertia", "InertialModel"), "armkit.model.inertia"),
 }
 
@@ -29,6 +31,7 @@ if TYPE_CHECKING:
     from armkit.dynamics.equations import (coriolis, coriolis_matrix, forward_dynamics,
                                            gravity_torques, inverse_dynamics, mass_matrix,
                                            with_payload)
+    from armkit.dynamics.torques import TorqueLimits, TorqueProfile, torque_profile
     from armkit.model.inertia import Inertia, InertialModel
 
 
