@@ -146,6 +146,19 @@ def test_energy_is_kept_in_free_fall(name):
     assert swing <= 1e-6 * moved
 
 
+@pytest.mark.slow
+@settings(max_examples=20)
+@given(states(names=("ur5", "inspection_6dof", "water_supply", "tool_changer_6dof")))
+def test_energy_is_kept_from_any_start(state):
+    """Free fall from random configurations and rates, 1 s of RK4."""
+    robot, q, qd, _ = state
+    robot = without_friction_and_armature(robot)
+    energy = free_fall(robot, q, qd * 0.3, 1.0, 5e-4)
+    moved = np.abs(energy).max() + np.abs(potential_energy(robot, q)
+                                          - potential_energy(robot, q + 0.5)) + 1.0
+    assert np.abs(energy - energy[0]).max() <= 1e-6 * moved
+
+
 @given(states(), st.floats(0.1, 20.0), st.lists(st.floats(-0.2, 0.2), min_size=3,
                                                   max_size=3))
 def test_payload_is_mass_added_to_the_last_link(state, mass, com):

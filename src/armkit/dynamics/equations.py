@@ -177,7 +177,8 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray:
     """
     d = robot.dynamics
     n = robot.n
-    if d is not None and _single(q, q, q):
+    if (d is not None and type(q) is np.ndarray and q.dtype is FLOAT and q.ndim == 1
+            and q.flags.c_contiguous):
         M = np.empty((n, n))
         if kernels.mass_one.light(q, d.floats, d.ints, M):
             return M

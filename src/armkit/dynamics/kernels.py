@@ -244,20 +244,19 @@ def mass_one(q, D, I, M):
     if q.shape[0] != n or M.shape[0] != n or M.shape[1] != n:
         return False
     T = pose_start(D, pre_at(nj))
-    axes = np.empty((nj, 6))
-    bodies = np.empty((nj, 10))
+    work = np.empty((nj, 16))                   # per body: S (6), then its 10 parameters
     finite = True
     for i in range(nj):
         value = joint_value(q, D, I, nj, i)
         finite &= math.isfinite(value)
         T = move(T, joint_kind(I, i), value)
         sw, sv = axis_of(T, joint_kind(I, i))
-        write6(axes[i], 0, sw, sv)
+        row = work[i]
+        write6(row, 0, sw, sv)
         m, h, J = body_in_base(T, D, body_at(nj, i))
-        row = bodies[i]
-        row[0], row[1], row[2], row[3] = m, h[0], h[1], h[2]
+        row[6], row[7], row[8], row[9] = m, h[0], h[1], h[2]
         for k in range(6):
-            row[4 + k] = J[k]
+            row[10 + k] = J[k]
         T = then(T, D, link_at(nj, i))
     for a in range(n):
         for b in range(n):
@@ -265,16 +264,18 @@ def mass_one(q, D, I, M):
         M[a, a] = D[armature_at(nj, n, a)]
     # Composite inertia of bodies j..nj-1, summed from the tip: in base coordinates a sum of
     # parameters. M_ij = S_i . (Ic_j S_j) for i <= j.
-    c = np.zeros(10)
+    cm, ch, cJ = 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for j in range(nj - 1, -1, -1):
-        for k in range(10):
-            c[k] += bodies[j, k]
-        sw, sv = read6(axes[j], 0)
-        fn, ff = inertia_times(c[0], (c[1], c[2], c[3]), (c[4], c[5], c[6], c[7], c[8], c[9]),
-                               sw, sv)
+        row = work[j]
+        cm += row[6]
+        ch = add(ch, (row[7], row[8], row[9]))
+        cJ = (cJ[0] + row[10], cJ[1] + row[11], cJ[2] + row[12], cJ[3] + row[13],
+              cJ[4] + row[14], cJ[5] + row[15])
+        sw, sv = read6(row, 0)
+        fn, ff = inertia_times(cm, ch, cJ, sw, sv)
         b, sj = joint_source(I, nj, j), joint_scale(D, nj, j)
         for i in range(j + 1):
-            aw, av = read6(axes[i], 0)
+            aw, av = read6(work[i], 0)
             value = joint_scale(D, nj, i) * sj * (dot(aw, fn) + dot(av, ff))
             a = joint_source(I, nj, i)
             M[a, b] += value
