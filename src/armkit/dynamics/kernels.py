@@ -20,7 +20,8 @@ leader's. Armature adds ``armature * qdd`` per joint value, friction ``viscous *
 coulomb * sign(qd)``.
 
 Vectors travel as 3-tuples of scalars, which numba keeps in registers. The batch loops come
-serial and parallel, run by `armkit.kinematics.core.run`. benchmarks/dynamics.py measures
+serial and parallel, run by `armkit.kinematics.core.run`. Inverse dynamics runs in the joint
+frames instead, with the chain's links (`rnea_one`). benchmarks/dynamics.py measures
 these against Pinocchio and roboticstoolbox-python.
 """
 
@@ -189,48 +190,107 @@ def joint_terms(q, qd, qdd, D, nj, tau):
 
 # --- one configuration ---------------------------------------------------------------------------
 
+@_inline
+def rotation_at(D, at):
+    """The rotation (9, row by row) and translation (3) of the rigid transform at D[at:at+12]."""
+    return ((D[at], D[at + 1], D[at + 2], D[at + 4], D[at + 5], D[at + 6], D[at + 8],
+             D[at + 9], D[at + 10]), (D[at + 3], D[at + 7], D[at + 11]))
+
+
+@_inline
+def times(R, v):
+    """R @ v for the rotation R given row by row."""
+    return (R[0] * v[0] + R[1] * v[1] + R[2] * v[2], R[3] * v[0] + R[4] * v[1] + R[5] * v[2],
+            R[6] * v[0] + R[7] * v[1] + R[8] * v[2])
+
+
+@_inline
+def transposed_times(R, v):
+    """R^T @ v for the rotation R given row by row."""
+    return (R[0] * v[0] + R[3] * v[1] + R[6] * v[2], R[1] * v[0] + R[4] * v[1] + R[7] * v[2],
+            R[2] * v[0] + R[5] * v[1] + R[8] * v[2])
+
+
+@_inline
+def turned(v, c, s):
+    """Rz(theta) @ v, given c = cos(theta) and s = sin(theta)."""
+    return (c * v[0] - s * v[1], s * v[0] + c * v[1], v[2])
+
+
+@_inline
+def unturned(v, c, s):
+    """Rz(theta)^T @ v."""
+    return (c * v[0] + s * v[1], c * v[1] - s * v[0], v[2])
+
+
 @_jit
 def rnea_one(q, qd, qdd, D, I, tau):
     """Joint torques (n,) of the motion (q, qd, qdd) into tau, gravity and joint terms
     included (recursive Newton-Euler); False if q, qd or qdd is not finite or not of the
-    robot's n values (then nothing is computed)."""
+    robot's n values (then nothing is computed).
+
+    Unlike the other kernels, this one runs in the joint frames themselves (Luh, Walker and
+    Paul's form): each frame's angular velocity and acceleration and its origin's linear
+    acceleration go from joint to joint through the packed chain's constant links and the
+    joint's motion about (along) z, a rotation about z costing four products; each body's
+    force and moment about its frame's origin come from its parameters as packed, and go back
+    to the base the same way. About half the products of the base-frame form.
+    """
     nj = joint_count(I)
     n = value_count(D, nj)
     if q.shape[0] != n or qd.shape[0] != n or qdd.shape[0] != n or tau.shape[0] != n:
         return False
     g = gravity_at(nj)
-    T = pose_start(D, pre_at(nj))
-    w, v = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    w, dw = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     # The base accelerates upward at -gravity: every body then feels its weight.
-    dw, dv = (0.0, 0.0, 0.0), (-D[g], -D[g + 1], -D[g + 2])
-    work = np.empty((nj, 12))
+    a = (-D[g], -D[g + 1], -D[g + 2])
+    # Per joint: the force and moment of its body (6), cos and sin of its turn (2), its
+    # origin in the frame before (3).
+    work = np.empty((nj, 11))
     finite = True
     for i in range(nj):
+        R, t = rotation_at(D, pre_at(nj) if i == 0 else link_at(nj, i - 1))
         value = joint_value(q, D, I, nj, i)
-        finite &= math.isfinite(value)
-        T = move(T, joint_kind(I, i), value)
-        sw, sv = axis_of(T, joint_kind(I, i))
         source, scale = joint_source(I, nj, i), joint_scale(D, nj, i)
         rate, acc = scale * qd[source], scale * qdd[source]
-        finite &= math.isfinite(rate + acc)
-        w, v = add(w, scaled(sw, rate)), add(v, scaled(sv, rate))
-        # d/dt S_i = v_i x S_i (S_i is fixed in body i).
-        dw = add(dw, add(scaled(sw, acc), scaled(cross(w, sw), rate)))
-        dv = add(dv, add(scaled(sv, acc), scaled(add(cross(w, sv), cross(v, sw)), rate)))
-        m, h, J = body_in_base(T, D, body_at(nj, i))
-        ln, lf = inertia_times(m, h, J, w, v)             # momentum
-        an, af = inertia_times(m, h, J, dw, dv)
-        cn, cf = force_cross(w, v, ln, lf)
-        write6(work[i], 0, sw, sv)
-        write6(work[i], 6, add(an, cn), add(af, cf))
-        T = then(T, D, link_at(nj, i))
+        finite &= math.isfinite(value + rate + acc)
+        revolute = joint_kind(I, i) == 0
+        if not revolute:                        # the slide moves the origin along R's z
+            t = add(t, scaled((R[2], R[5], R[8]), value))
+        # The new origin's acceleration, then everything in the new frame's axes.
+        a = add(a, add(cross(dw, t), cross(w, cross(w, t))))
+        w, dw, a = transposed_times(R, w), transposed_times(R, dw), transposed_times(R, a)
+        if revolute:
+            c, s = math.cos(value), math.sin(value)
+            w, dw, a = unturned(w, c, s), unturned(dw, c, s), unturned(a, c, s)
+            dw = (dw[0] + w[1] * rate, dw[1] - w[0] * rate, dw[2] + acc)
+            w = (w[0], w[1], w[2] + rate)
+        else:
+            c, s = 1.0, 0.0
+            a = (a[0] + 2.0 * w[1] * rate, a[1] - 2.0 * w[0] * rate, a[2] + acc)
+        # Newton and Euler about the frame's origin: h = m c, J about the origin.
+        b = body_at(nj, i)
+        m, h = D[b], (D[b + 1], D[b + 2], D[b + 3])
+        J = (D[b + 4], D[b + 5], D[b + 6], D[b + 7], D[b + 8], D[b + 9])
+        force = add(scaled(a, m), add(cross(dw, h), cross(w, cross(w, h))))
+        moment = add(add(symmetric_times(J, dw), cross(w, symmetric_times(J, w))), cross(h, a))
+        row = work[i]
+        write6(row, 0, force, moment)
+        row[6], row[7], row[8], row[9], row[10] = c, s, t[0], t[1], t[2]
     joint_terms(q, qd, qdd, D, nj, tau)
-    fn, ff = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    # Backward: what bodies i..nj-1 need, about frame i's origin, in its axes.
+    f, moment = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     for i in range(nj - 1, -1, -1):
-        sw, sv = read6(work[i], 0)
-        bn, bf = read6(work[i], 6)
-        fn, ff = add(fn, bn), add(ff, bf)
-        tau[joint_source(I, nj, i)] += joint_scale(D, nj, i) * (dot(sw, fn) + dot(sv, ff))
+        row = work[i]
+        own_force, own_moment = read6(row, 0)
+        f, moment = add(f, own_force), add(moment, own_moment)
+        along = moment[2] if joint_kind(I, i) == 0 else f[2]
+        tau[joint_source(I, nj, i)] += joint_scale(D, nj, i) * along
+        if i > 0:                               # into the frame before joint i
+            R, _ = rotation_at(D, link_at(nj, i - 1))
+            c, s, t = row[6], row[7], (row[8], row[9], row[10])
+            f = times(R, turned(f, c, s))
+            moment = add(times(R, turned(moment, c, s)), cross(t, f))
     return finite
 
 
