@@ -47,13 +47,16 @@ def packed(robot: Robot, gravity: ArrayLike | None = None) -> KernelInertia:
     return d if gravity is None else d.with_gravity(gravity)
 
 
+VECTOR = (8,)    # the strides of a C-contiguous float64 vector
+
+
 def _single(a, b, c) -> bool:
     """Whether the three arrays are each of the one type the one-configuration kernels take
-    (C-contiguous float64 vectors); chained comparisons, the cheapest first. The kernels check
-    their lengths (and return False to send a wrong one through the checks that name it)."""
+    (C-contiguous float64 vectors: strides (8,)); chained comparisons, the cheapest first.
+    The kernels check their lengths (and return False to send a wrong one through the checks
+    that name it)."""
     return (type(a) is type(b) is type(c) is np.ndarray and a.dtype is b.dtype is c.dtype is FLOAT
-            and a.ndim == b.ndim == c.ndim == 1 and a.flags.c_contiguous
-            and b.flags.c_contiguous and c.flags.c_contiguous)
+            and a.strides == b.strides == c.strides == VECTOR)
 
 
 def _batch(robot: Robot, **named: ArrayLike) -> tuple[tuple[int, ...], list[NDArray]]:
@@ -177,8 +180,7 @@ def mass_matrix(robot: Robot, q: ArrayLike) -> NDArray:
     """
     d = robot.dynamics
     n = robot.n
-    if (d is not None and type(q) is np.ndarray and q.dtype is FLOAT and q.ndim == 1
-            and q.flags.c_contiguous):
+    if d is not None and type(q) is np.ndarray and q.dtype is FLOAT and q.strides == VECTOR:
         M = np.empty((n, n))
         if kernels.mass_one.light(q, d.floats, d.ints, M):
             return M
