@@ -237,7 +237,7 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
         tc = tc + tf * np.sign(dq[:, held])     # Coulomb friction opposes the motion
         tau_bound = np.broadcast_to(tau_max[held], ta.shape).copy()
         a = np.hstack([dq, ta])
-    speed = np.zeros(s.shape[0])
+    sd_before = np.zeros(s.shape[0])
     for _ in range(TORQUE_ROUNDS):
         if torque is not None:
             # Viscous friction d sd is not linear in x = sd^2: it enters as its tangent at the
@@ -245,9 +245,9 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
             # first round, nor where the path was at rest); the check below holds the exact
             # torque, and each round's speeds come closer to the last (Newton's steps).
             with np.errstate(divide="ignore"):
-                slope = np.where(speed > 0, 0.5 / speed, 0.0)[:, None]
+                slope = np.where(sd_before > 0, 0.5 / sd_before, 0.0)[:, None]
             b = np.hstack([ddq, tb + td * slope])
-            c = np.hstack([np.zeros_like(dq), tc + td * (0.5 * speed)[:, None]])
+            c = np.hstack([np.zeros_like(dq), tc + td * (0.5 * sd_before)[:, None]])
             bound = np.hstack([np.broadcast_to(A, dq.shape), tau_bound])
         channels = [np.ascontiguousarray(x) for x in (a, b, c, bound)]
         end_top = _end_top(*(x[-1] for x in channels), xv[-1]) if still[1] else 0.0
@@ -297,7 +297,7 @@ def retime(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike, *,
         tau_bound[1:] = np.minimum(tau_bound[1:], cap)
         if not (tau_bound > 0).all():
             break
-        speed = sd
+        sd_before = sd
     return _failed("torque limits not met between grid points", s[0])
 
 
