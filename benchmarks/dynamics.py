@@ -2,7 +2,8 @@
 
     python benchmarks/dynamics.py            # every case
     python benchmarks/dynamics.py --quick    # fewer rounds, a batch of 1e5
-    python benchmarks/dynamics.py --cpu      # single calls in this thread's CPU time
+    python benchmarks/dynamics.py --cpu      # CPU time (a loaded machine's waits left out)
+    python benchmarks/dynamics.py --threads 2   # the batch on two threads
 
 1. one call from Python, warm: `inverse_dynamics`, `mass_matrix`, `forward_dynamics` against
    Pinocchio's ``rnea``, ``crba``, ``aba`` on the same URDF (example-robot-data's UR5, 6
@@ -102,7 +103,7 @@ def single_calls(rounds: int, clock) -> None:
     row("puma560 (6)", "inverse dynamics", times["rnea"], "rtb rne", times["rtb rne"])
 
 
-def batch(size: int, rounds: int) -> None:
+def batch(size: int, rounds: int, clock) -> None:
     robot = armkit.load_robot(urdf("ur_description/urdf/ur5_robot.urdf"), tip="tool0")
     model = pin.buildModelFromUrdf(urdf("ur_description/urdf/ur5_robot.urdf"))
     model.gravity.linear[:] = robot.inertia.gravity
@@ -123,14 +124,17 @@ def batch(size: int, rounds: int) -> None:
 
     times = interleaved({"rnea": lambda: inverse_dynamics(robot, Q, QD, QDD),
                          "pin rnea": pin_rnea,
-                         "crba": lambda: mass_matrix(robot, Q), "pin crba": pin_crba}, rounds)
+                         "crba": lambda: mass_matrix(robot, Q), "pin crba": pin_crba}, rounds,
+                        clock=clock)
     per = {k: type(v)(tuple(t / (size if k in ("rnea", "crba") else few) for t in v.times))
            for k, v in times.items()}
     threads = armkit.get_num_threads()
     row("ur5", f"ID per config, N={size:.0e}", per["rnea"], "pin loop", per["pin rnea"], "ns")
     row("ur5", f"M per config, N={size:.0e}", per["crba"], "pin loop", per["pin crba"], "ns")
-    print(f"{'':12} (armkit's batch on up to {threads} threads; Pinocchio one call per "
-          f"configuration from Python)")
+    what = ("CPU time of all threads: on idle cores the wall time is this over the threads"
+            if clock is time.process_time else "wall time")
+    print(f"{'':12} (armkit's batch on up to {threads} threads, {what}; Pinocchio one call "
+          f"per configuration from Python)")
 
 
 def toppra_retime(robot, path, waypoints, vmax, amax, tau_max, grid):
@@ -150,7 +154,7 @@ def toppra_retime(robot, path, waypoints, vmax, amax, tau_max, grid):
     return algorithm.compute_trajectory()
 
 
-def retiming(rounds: int) -> None:
+def retiming(rounds: int, clock) -> None:
     robot = armkit.robot("ur5")
     waypoints = np.random.default_rng(0).uniform(-2, 2, (10, 6))
     vmax, amax = robot.velocity_limits, np.full(6, 20.0)
@@ -162,7 +166,8 @@ def retiming(rounds: int) -> None:
     theirs = toppra_retime(robot, path, waypoints, vmax, amax, tau_max, grid)
     times = interleaved({"armkit": lambda: retime(path, vmax, amax, torque=limits, grid=grid),
                          "toppra": lambda: toppra_retime(robot, path, waypoints, vmax, amax,
-                                                         tau_max, grid)}, rounds)
+                                                         tau_max, grid)}, rounds,
+                        clock=clock)
     row("ur5", "torque-limited retime, 10 wp", times["armkit"], "toppra", times["toppra"],
         "ms")
     t = np.linspace(0, theirs.duration, 10_000)
@@ -179,14 +184,19 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="fewer rounds, a batch of 1e5")
     parser.add_argument("--rounds", type=int, default=7)
     parser.add_argument("--cpu", action="store_true",
-                        help="single calls in this thread's CPU time, not wall time")
+                        help="CPU time instead of wall time: this thread's for single calls "
+                             "and retiming, the process's (all threads) for the batch")
+    parser.add_argument("--threads", type=int, default=None,
+                        help="threads for the batch (default: as many as the idle cores)")
     args = parser.parse_args()
     rounds = 3 if args.quick else args.rounds
+    armkit.set_num_threads(args.threads)
     print(load())
     print(f"{'robot':12} {'case':28} {'armkit':>24} {'reference':>33} {'ratio':>20}")
     single_calls(rounds, time.thread_time if args.cpu else time.perf_counter)
-    batch(100_000 if args.quick else 1_000_000, rounds)
-    retiming(rounds)
+    batch(100_000 if args.quick else 1_000_000, rounds,
+          time.process_time if args.cpu else time.perf_counter)
+    retiming(rounds, time.thread_time if args.cpu else time.perf_counter)
     print(load())
 
 

@@ -227,7 +227,13 @@ def unturned(v, c, s):
 def rnea_one(q, qd, qdd, D, I, tau):
     """Joint torques (n,) of the motion (q, qd, qdd) into tau, gravity and joint terms
     included (recursive Newton-Euler); False if q, qd or qdd is not finite or not of the
-    robot's n values (then nothing is computed).
+    robot's n values (then nothing is computed). See `rnea_with`."""
+    return rnea_with(q, qd, qdd, D, I, tau, np.empty((joint_count(I), 11)))
+
+
+@_jit
+def rnea_with(q, qd, qdd, D, I, tau, work):
+    """`rnea_one` with its scratch (n_joints, 11) given (a batch loop reuses one).
 
     Unlike the other kernels, this one runs in the joint frames themselves (Luh, Walker and
     Paul's form): each frame's angular velocity and acceleration and its origin's linear
@@ -244,9 +250,8 @@ def rnea_one(q, qd, qdd, D, I, tau):
     w, dw = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     # The base accelerates upward at -gravity: every body then feels its weight.
     a = (-D[g], -D[g + 1], -D[g + 2])
-    # Per joint: the force and moment of its body (6), cos and sin of its turn (2), its
-    # origin in the frame before (3).
-    work = np.empty((nj, 11))
+    # Per joint in `work`: the force and moment of its body (6), cos and sin of its turn (2),
+    # its origin in the frame before (3).
     finite = True
     for i in range(nj):
         R, t = rotation_at(D, pre_at(nj) if i == 0 else link_at(nj, i - 1))
@@ -299,12 +304,18 @@ def mass_one(q, D, I, M):
     """Joint-space mass matrix (n, n) at q into M, armature included (composite rigid body
     algorithm); False if q is not finite or not of the robot's n values (then nothing is
     computed)."""
+    return mass_with(q, D, I, M, np.empty((joint_count(I), 16)))
+
+
+@_jit
+def mass_with(q, D, I, M, work):
+    """`mass_one` with its scratch (n_joints, 16) given: per body S (6), then its 10
+    parameters in the base frame."""
     nj = joint_count(I)
     n = value_count(D, nj)
     if q.shape[0] != n or M.shape[0] != n or M.shape[1] != n:
         return False
     T = pose_start(D, pre_at(nj))
-    work = np.empty((nj, 16))                   # per body: S (6), then its 10 parameters
     finite = True
     for i in range(nj):
         value = joint_value(q, D, I, nj, i)
@@ -490,28 +501,39 @@ def coriolis_matrix_one(q, qd, D, I, C):
 
 # --- batch loops: Q (N, n) -> outputs with leading N ---------------------------------------------
 
+CHUNK = 1024       # configurations of a parallel batch that share one scratch array
+
+
 @_jit
 def rnea(Q, QD, QDD, D, I, tau):
+    work = np.empty((joint_count(I), 11))
     for k in range(Q.shape[0]):
-        rnea_one(Q[k], QD[k], QDD[k], D, I, tau[k])
+        rnea_with(Q[k], QD[k], QDD[k], D, I, tau[k], work)
 
 
 @_pjit
 def rnea_parallel(Q, QD, QDD, D, I, tau):
-    for k in prange(Q.shape[0]):
-        rnea_one(Q[k], QD[k], QDD[k], D, I, tau[k])
+    N = Q.shape[0]
+    for c in prange((N + CHUNK - 1) // CHUNK):
+        work = np.empty((joint_count(I), 11))
+        for k in range(c * CHUNK, min(N, (c + 1) * CHUNK)):
+            rnea_with(Q[k], QD[k], QDD[k], D, I, tau[k], work)
 
 
 @_jit
 def mass(Q, D, I, M):
+    work = np.empty((joint_count(I), 16))
     for k in range(Q.shape[0]):
-        mass_one(Q[k], D, I, M[k])
+        mass_with(Q[k], D, I, M[k], work)
 
 
 @_pjit
 def mass_parallel(Q, D, I, M):
-    for k in prange(Q.shape[0]):
-        mass_one(Q[k], D, I, M[k])
+    N = Q.shape[0]
+    for c in prange((N + CHUNK - 1) // CHUNK):
+        work = np.empty((joint_count(I), 16))
+        for k in range(c * CHUNK, min(N, (c + 1) * CHUNK)):
+            mass_with(Q[k], D, I, M[k], work)
 
 
 @_jit
