@@ -234,9 +234,22 @@ VALUES = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(-
                    st.lists(st.floats(-10, 10), max_size=7))
 
 
-@settings(max_examples=150, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.data())
 def test_mutated_inertia_sections_load_or_are_refused_by_name(tmp_path, data):
+    load_mutated(tmp_path, data)
+
+
+@pytest.mark.slow
+@settings(max_examples=1000, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.data())
+def test_many_mutated_inertia_sections(tmp_path, data):
+    load_mutated(tmp_path, data)
+
+
+def load_mutated(tmp_path, data) -> None:
+    """ARM_M with one to three fields of its inertia section or joints replaced by any value:
+    it loads to finite dynamics, or is refused with the file's path and the field."""
     doc = yaml.safe_load(ARM_M)
     for _ in range(data.draw(st.integers(1, 3))):
         where = data.draw(st.sampled_from(["link", "payload", "gravity", "joint"]))
