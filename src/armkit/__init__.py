@@ -42,6 +42,9 @@ _HOMES = {
     "read_camera_mount": "armkit.io.camera",
     **dict.fromkeys(("detect_target", "TargetResult"), "armkit.perception"),
     **dict.fromkeys(("plan", "PlanResult", "Scene"), "armkit.planning"),
+    **dict.fromkeys(("inverse_dynamics", "gravity_torques", "mass_matrix", "coriolis",
+                     "coriolis_matrix", "forward_dynamics", "with_payload", "torque_profile",
+                     "TorqueLimits"), "armkit.dynamics"),
 }
 
 if TYPE_CHECKING:       # what the names are, for readers and type checkers
@@ -50,6 +53,9 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
                                     points_to_base, poses_to_base, select_poses)
     from armkit.drives import (DriveClient, SimDrive, check_waypoints, load_register_map,
                                send_waypoints)
+    from armkit.dynamics import (TorqueLimits, coriolis, coriolis_matrix, forward_dynamics,
+                                 gravity_torques, inverse_dynamics, mass_matrix,
+                                 torque_profile, with_payload)
     from armkit.io.camera import read_camera_mount
     from armkit.perception import TargetResult, detect_target
     from armkit.planning import PlanResult, Scene, plan

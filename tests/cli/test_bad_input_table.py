@@ -267,6 +267,28 @@ ROWS: list[tuple[tuple[str, ...], str]] = [
     (("sim-drive", "--robot", LONG), "--robot: expected a built-in name or a robot file"),
     (("sim-drive", "--bogus"), "--bogus: expected an option of `armkit sim-drive`"),
     (("sim-drive", "extra"), "armkit sim-drive: expected no more arguments, found 'extra'"),
+    # dynamics
+    (("dynamics", "ur5"), "--q: expected a value, found none"),
+    (("dynamics", "ur5", "--q", "0 0 0"), "--q: expected 6 values (the joints of ur5), found 3"),
+    (("dynamics", "ur5", "--q", "0 0 0 0 0 x"), "--q: expected a number from -1e+09 to 1e+09, "
+                                                "found 'x'"),
+    (("dynamics", "ur5", "--q", "0 0 0 0 0 nan"), "--q: expected a finite number"),
+    (("dynamics", "ur5", "--q", "0 0 0 0 0 1e308"), "--q: expected a number from -1e+09 to "
+                                                    "1e+09, found 1e+308"),
+    (("dynamics", "ur5", "--q", "0,0,0,0,0,0", "--qd", "1 2"), "--qd: expected 6 values"),
+    (("dynamics", "ur5", "--q", "0,0,0,0,0,0", "--qdd", "inf,0,0,0,0,0"),
+     "--qdd: expected a finite number"),
+    (("dynamics", "ur5", "--q", "0,0,0,0,0,0", "--payload", "-1"),
+     "--payload: expected a number from 0 to 10000 kg, found -1"),
+    (("dynamics", "ur5", "--q", "0,0,0,0,0,0", "--payload", "1 2"),
+     "--payload: expected MASS or MASS X Y Z (kg, m), found 2 numbers"),
+    (("dynamics", "ur5", "--q", "0,0,0,0,0,0", "--payload", ""),
+     "--payload: expected numbers separated by spaces or commas, found none"),
+    (("dynamics", "stanford", "--q", "0,0,0.5,0,0,0"), "robot stanford: expected inertial "
+                                                       "parameters"),
+    (("dynamics", "ur6", "--q", "0"), "robot: expected a built-in name"),
+    (("dynamics", "ur5", "--q", "0,0,0,0,0,0", "--bogus"), "--bogus: expected an option of "
+                                                           "`armkit dynamics`"),
     # demo
     (("demo", "--bogus"), "--bogus: expected an option of `armkit demo`"),
     (("demo", "extra"), "armkit demo: expected no more arguments, found 'extra'"),

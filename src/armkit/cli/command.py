@@ -173,7 +173,7 @@ COMMAND_MODULES = {"handeye": "calibration", "calibrate": "calibration",
                    "ik": "ik", "run": "job", "demo": "job", "view": "job",
                    "detect": "perception", "plan": "plan", "robots": "robots", "show": "robots",
                    "fk": "robots", "traj": "trajectory", "warm-up": "warmup",
-                   "workspace": "workspace"}
+                   "workspace": "workspace", "dynamics": "dynamics"}
 MODULES = tuple(dict.fromkeys(COMMAND_MODULES.values()))
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print one JSON document and nothing else.")]

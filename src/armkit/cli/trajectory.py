@@ -3,7 +3,8 @@
 The case (`armkit.io.trajectory_cases`) comes from a YAML file or from options (options
 override the file), in the robot file's units. Positions outside the joint limits are bad
 input (exit 2); velocities and accelerations beyond the limits are reported per joint, where
-and by how much, and make the exit status 1 unless ``--allow-limits``.
+and by how much, and make the exit status 1 unless ``--allow-limits``; so do torques beyond
+the torque limits, reported for a robot with inertias (`armkit.dynamics.torque_profile`).
 """
 
 from __future__ import annotations
@@ -81,8 +82,8 @@ def traj(
                                                   "line in joint space).")] = None,
     out: Annotated[Path, typer.Option(help="Directory for the figures.")] = Path("."),
     allow_limits: Annotated[bool, typer.Option(
-        "--allow-limits", help="Exit 0 even where velocities or accelerations go beyond the "
-                               "limits (they are still reported).")] = False,
+        "--allow-limits", help="Exit 0 even where velocities, accelerations or torques go "
+                               "beyond the limits (they are still reported).")] = False,
     as_json: JsonFlag = False,
     si: SiFlag = False,
 ) -> None:
@@ -109,18 +110,61 @@ def traj(
                 "joints": _rows(robot, spec.trajectories[label], s, spec.moving, units)}
                for label, s in table.items()]
     beyond = [_excess_row(robot, e, units) for e in excesses]
+    torques = _torque_rows(robot, spec.trajectories)
+    over = [row for t in torques for row in t["joints"] if row["ratio"] > 1]
     if as_json:
         print_json({"robot": robot.name, "units": {"length": units.length,
                                                    "angle": units.angle},
                     "case": "via points" if spec.via else "point to point",
                     "trajectories": results, "figures": [str(f) for f in figures],
                     "limits": {"within": not excesses, "allowed": allow_limits,
-                               "beyond": beyond}})
+                               "beyond": beyond},
+                    "torques": torques})
     else:
         _print(robot, results, figures)
         _print_excesses(beyond, allow_limits)
-    if excesses and not allow_limits:
+        _print_torques(robot, torques, allow_limits)
+    if (excesses or over) and not allow_limits:
         raise typer.Exit(EXIT_FAILED)
+
+
+def _torque_rows(robot: Robot, trajectories: dict) -> list[dict]:
+    """Each trajectory's peak joint torques against the torque limits (N m, N), when the robot
+    has inertias (`armkit.dynamics.torque_profile`); none otherwise."""
+    if robot.inertia is None:
+        return []
+    from armkit.dynamics import torque_profile
+
+    rows = []
+    for label, tr in trajectories.items():
+        profile = torque_profile(robot, tr)
+        rows.append({"label": label, "joints": [
+            {"joint": robot.joint_names[j], "number": j + 1,
+             "unit": "N m" if robot.chain.revolute[j] else "N",
+             "peak": profile.peak[j], "time": profile.peak_time[j],
+             "limit": profile.limits[j], "ratio": profile.ratio[j]} for j in range(robot.n)]})
+    return rows
+
+
+def _print_torques(robot: Robot, torques: list[dict], allowed: bool) -> None:
+    if not torques:
+        return
+    table = Table("trajectory", "joint", "peak |torque|", "at t (s)", "limit", box=None,
+                  title=f"{robot.name}: peak joint torques", title_justify="left")
+    for t in torques:
+        for i, row in enumerate(t["joints"]):
+            table.add_row(t["label"] if i == 0 else "",
+                          f"{row['number']} {row['joint']} ({row['unit']})", _fmt(row["peak"]),
+                          f"{row['time']:.3g}",
+                          _fmt(row["limit"]) if np.isfinite(row["limit"]) else "")
+    stdout.print(table)
+    over = [f"{t['label']}: joint {row['number']} {row['joint']} {row['ratio']:.3g} times its "
+            f"limit" for t in torques for row in t["joints"] if row["ratio"] > 1]
+    if over:
+        stdout.print(f"beyond the torque limits{' (allowed: --allow-limits)' if allowed else ''}"
+                     ": " + "; ".join(over), markup=False)
+    else:
+        stdout.print("within the torque limits")
 
 
 def _excess_row(robot: Robot, e: LimitExcess, units) -> dict:

@@ -33,14 +33,15 @@ from pydantic import Field, field_validator, model_validator
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import (Number, StrictModel, UnitsField, found_text, kind_of,
                                  read_yaml, validated)
-from armkit.model.chain import Limits
+from armkit.model.chain import Chain, Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
+from armkit.model.inertia import Inertia, InertialModel, home_link_frames
 from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
 from armkit.model.robot import Robot, Units
 from armkit.io.urdf import read_urdf
-from armkit.model.urdf import URDFTable, chain_from_urdf
-from armkit.spatial import matrix_to_rpy, pose_from_xyz_rpy
+from armkit.model.urdf import URDFTable, chain_from_urdf, inertia_from_urdf
+from armkit.spatial import invert, matrix_to_rpy, pose_from_xyz_rpy
 
 Vector3 = Annotated[list[Number], Field(min_length=3, max_length=3)]
 
@@ -60,6 +61,15 @@ MAX_RATE = 1e6
 MAX_AXIS = 1e3
 """The largest component of a screw axis direction (it is normalised)."""
 
+MAX_MASS = 1e6
+"""The largest mass a robot file may hold (kg)."""
+
+MAX_INERTIA = 1e6
+"""The largest inertia tensor entry a robot file may hold (kg m^2)."""
+
+MAX_TORQUE = 1e7
+"""The largest torque limit, friction or armature a robot file may hold (SI units)."""
+
 
 class PoseField(StrictModel):
     xyz: Vector3 = [0.0, 0.0, 0.0]
@@ -71,6 +81,11 @@ class _JointField(StrictModel):
     limits: list[Number] | None = None
     velocity: Annotated[Number, Field(gt=0)] | None = None
     acceleration: Annotated[Number, Field(gt=0)] | None = None
+    # Dynamics, SI whatever the file's units: N m (N), N m s/rad (N s/m), kg m^2 (kg).
+    torque: Annotated[Number, Field(gt=0)] | None = None
+    viscous: Annotated[Number, Field(ge=0)] | None = None
+    coulomb: Annotated[Number, Field(ge=0)] | None = None
+    armature: Annotated[Number, Field(ge=0)] | None = None
 
     @field_validator("limits")
     @classmethod
@@ -91,8 +106,9 @@ class DHJointField(_JointField):
     def _limits_match_type(self):
         if self.type == "prismatic" and self.limits is None:
             raise ValueError("expected limits [lower, upper] for a prismatic joint, found none")
-        if self.type == "fixed" and (self.limits or self.velocity or self.acceleration):
-            raise ValueError("expected no limits on a fixed row, found some")
+        if self.type == "fixed" and any(getattr(self, key) is not None for key in JOINT_ONLY):
+            raise ValueError(f"expected none of {', '.join(JOINT_ONLY)} on a fixed row, found "
+                             f"some")
         return self
 
 
@@ -110,6 +126,31 @@ class ScrewJointField(_JointField):
         if self.type == "prismatic" and self.limits is None:
             raise ValueError("expected limits [lower, upper] for a prismatic joint, found none")
         return self
+
+
+JOINT_ONLY = ("limits", "velocity", "acceleration", "torque", "viscous", "coulomb", "armature")
+"""The fields of a moving joint that a fixed DH row may not have."""
+
+FRICTION_FIELDS = ("armature", "viscous", "coulomb")
+"""A joint's dynamic fields that belong to the inertial model (`InertialModel`)."""
+
+
+class BodyField(StrictModel):
+    """A rigid body: kg, the file's length unit (com) and kg times its square (inertia, about
+    the centre of mass: ixx iyy izz ixy ixz iyz)."""
+
+    mass: Annotated[Number, Field(ge=0)]
+    com: Vector3 = [0.0, 0.0, 0.0]
+    inertia: Annotated[list[Number], Field(min_length=6, max_length=6)] = [0.0] * 6
+
+
+class InertiaField(StrictModel):
+    """The optional ``inertia:`` section: one body per moving joint (link frames; the base
+    frame at home for screws), a payload in the tool frame, gravity (length unit / s^2)."""
+
+    links: list[BodyField] | None = None
+    payload: BodyField | None = None
+    gravity: Vector3 | None = None
 
 
 class CollisionShapeField(StrictModel):
@@ -141,6 +182,7 @@ class _RobotField(StrictModel):
     base: PoseField | None = None
     tool: PoseField | None = None
     collision: CollisionField | None = None
+    inertia: InertiaField | None = None
 
 
 class DHFile(_RobotField):
@@ -190,10 +232,12 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
         found = read_urdf(urdf, spec.tip)
         table = dataclasses.replace(found, T_base=T_base, T_tool=T_tool)
         chain = chain_from_urdf(table)
+        inertia = inertia_from_urdf(table, chain)
     elif isinstance(spec, ScrewFile):
         rows = tuple(_screw_row(j, i, units) for i, j in enumerate(spec.joints))
         table = ScrewTable(rows, _pose(spec.home, units), T_base, T_tool)
         chain = chain_from_poe(table)
+        inertia = None
     else:
         rows = tuple(_dh_row(j, units) for j in spec.joints)
         if all(r.kind == "fixed" for r in rows):
@@ -201,8 +245,10 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
                                  "only fixed rows")
         table = DHTable(rows, convention == "mdh", T_base, T_tool)
         chain = chain_from_dh(table)
+        inertia = None
     collision = _collision(spec.collision, units, chain.n, path)
-    return Robot(spec.name, chain, units, spec.description, table, collision)
+    inertia = _inertia(spec, inertia, chain, units, path)
+    return Robot(spec.name, chain, units, spec.description, table, collision, inertia)
 
 
 def _collision(field: CollisionField | None, units: Units, n: int,
@@ -222,6 +268,80 @@ def _collision(field: CollisionField | None, units: Units, n: int,
                                   float(length(s.radius))) for s in field.shapes)
     radius = None if field.radius is None else float(length(field.radius))
     return CollisionSpec(radius, shapes, tuple((int(i), int(j)) for i, j in field.skip))
+
+
+def _body(field: BodyField, units: Units, path: str, where: str) -> Inertia:
+    """A body of the inertia section in SI, in the frame the file gives it in."""
+    com = units.length_to_si(field.com)
+    six = units.length_to_si(units.length_to_si(field.inertia))      # kg length^2 -> kg m^2
+    for key, values, bound in (("mass", [field.mass], MAX_MASS), ("com", com, MAX_LENGTH),
+                               ("inertia", six, MAX_INERTIA)):
+        if not (np.abs(values) <= bound).all():
+            raise ModelFileError(path, f"{where}.{key}", f"values of at most {bound:g} in SI "
+                                 "units", found_text(getattr(field, key)))
+    try:
+        return Inertia.from_six(field.mass, com, six)
+    except InputError as err:
+        raise ModelFileError(path, f"{where}.inertia", "a physical inertia tensor "
+                             "(symmetric, principal moments >= 0)",
+                             str(err).split("found ")[-1]) from None
+
+
+def _inertia(spec: _RobotField, from_urdf: InertialModel | None, chain: Chain, units: Units,
+             path: str) -> InertialModel | None:
+    """The inertial model: the file's inertia section and its joints' armature and friction
+    (or, for a URDF, the URDF's inertials with the section's payload and gravity).
+
+    Raises
+    ------
+    ModelFileError
+        A section that does not fit the chain (a body per moving joint), friction or armature
+        without inertias, a gravity that is not 0 or 0.1 .. 100 m/s^2.
+    """
+    field = spec.inertia
+    joints = getattr(spec, "joints", [])
+    moving = [j for j in joints if j.type != "fixed"]
+    for i, joint in enumerate(joints):
+        given = [key for key in FRICTION_FIELDS if getattr(joint, key) is not None]
+        if given and (field is None or field.links is None):
+            raise ModelFileError(path, f"joints[{i}].{given[0]}", "an inertia: section with "
+                                 "links (friction and armature belong to a robot with "
+                                 "inertias)", "none")
+    if field is None:
+        return from_urdf
+    if isinstance(spec, URDFFile):
+        if field.links is not None:
+            raise ModelFileError(path, "inertia.links", "none for a URDF robot (its <inertial> "
+                                 "elements give them)", f"{len(field.links)} links")
+        if from_urdf is None:
+            raise ModelFileError(path, "inertia", "a URDF with <inertial> elements for a "
+                                 "payload or gravity", "none in the URDF")
+        model = from_urdf
+    else:
+        if field.links is None:
+            raise ModelFileError(path, "inertia.links", f"{chain.n_joints} bodies, one per "
+                                 "moving joint", "none")
+        if len(field.links) != chain.n_joints:
+            raise ModelFileError(path, "inertia.links", f"{chain.n_joints} bodies, one per "
+                                 "moving joint", str(len(field.links)))
+        links = [_body(b, units, path, f"inertia.links[{i}]")
+                 for i, b in enumerate(field.links)]
+        if isinstance(spec, ScrewFile):             # given in the base frame at home
+            links = [b.moved(invert(T)) for b, T in zip(links, home_link_frames(chain))]
+        model = InertialModel(links, **{key: [getattr(j, key) or 0.0 for j in moving]
+                                        for key in FRICTION_FIELDS})
+    if field.gravity is not None:
+        gravity = units.length_to_si(field.gravity)
+        magnitude = float(np.linalg.norm(gravity))
+        if not (magnitude == 0 or 0.1 <= magnitude <= 100):
+            raise ModelFileError(path, "inertia.gravity", f"0 or 0.1 .. 100 m/s^2 "
+                                 f"({units.length}/s^2 in this file)",
+                                 f"{magnitude:.6g} m/s^2")
+        model = dataclasses.replace(model, gravity=gravity)
+    if field.payload is not None:
+        model = dataclasses.replace(model, payload=_body(field.payload, units, path,
+                                                         "inertia.payload"))
+    return model
 
 
 def _check_magnitudes(spec: _RobotField, units: Units, path: str) -> None:
@@ -275,6 +395,10 @@ def _check_magnitudes(spec: _RobotField, units: Units, path: str) -> None:
             if value is not None:
                 check(f"{where}.{key}", value, f"a {key} limit", to_si, MAX_RATE,
                       unit + per, si_unit + per)
+        for key in ("torque",) + FRICTION_FIELDS:
+            value = getattr(joint, key)
+            if value is not None:
+                check(f"{where}.{key}", value, f"a {key}", float, MAX_TORQUE, "", "")
 
 
 def _check_unique_names(spec: _RobotField, path: str) -> None:
@@ -313,7 +437,8 @@ def _limits(joint: _JointField, kind: str, units: Units) -> Limits | None:
         lower, upper = float(to_si(lower)), float(to_si(upper))
     velocity, acceleration = (np.inf if v is None else float(to_si(v))
                               for v in (joint.velocity, joint.acceleration))
-    return Limits(lower, upper, velocity, acceleration)
+    torque = np.inf if joint.torque is None else float(joint.torque)
+    return Limits(lower, upper, velocity, acceleration, torque)
 
 
 def _dh_row(joint: DHJointField, units: Units) -> DHRow:
@@ -351,7 +476,9 @@ def load_robot(path: str | Path, tip: str | None = None) -> Robot:
     if path.suffix.lower() in (".urdf", ".xacro"):
         table = read_urdf(path, tip)
         name = path.name.split(".")[0] or path.stem
-        return Robot(name, chain_from_urdf(table), Units("m", "rad"), "", table)
+        chain = chain_from_urdf(table)
+        return Robot(name, chain, Units("m", "rad"), "", table,
+                     inertia=inertia_from_urdf(table, chain))
     if tip is not None:
         raise InputError(f"tip: expected none for a robot file (it names its own tip), "
                          f"found {found_text(tip)} for {path}")
@@ -384,6 +511,8 @@ def _limits_doc(limits: Limits | None, kind: str, units: Units) -> dict:
         value = getattr(limits, key)
         if np.isfinite(value):
             doc[key] = _num(from_si(value))
+    if np.isfinite(limits.torque):
+        doc["torque"] = _num(limits.torque)
     return doc
 
 
@@ -429,7 +558,38 @@ def robot_document(robot: Robot, folder: str | Path | None = None) -> dict:
                           **_limits_doc(r.limits, r.kind, u)} for r in table.rows]
     if robot.collision is not None:
         doc["collision"] = _collision_doc(robot.collision, u)
+    if robot.inertia is not None:
+        _inertia_doc(robot, doc)
     return doc
+
+
+def _body_doc(body: Inertia, u: Units) -> dict:
+    t = u.length_from_si(u.length_from_si(body.tensor))
+    return {"mass": _num(body.mass), "com": _nums(u.length_from_si(body.com)),
+            "inertia": _nums([t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2]])}
+
+
+def _inertia_doc(robot: Robot, doc: dict) -> None:
+    """Add the inertia section, and the joints' armature and friction, to `doc`."""
+    model, u = robot.inertia, robot.units
+    section: dict[str, Any] = {}
+    if not isinstance(robot.table, URDFTable):
+        links = model.links
+        if isinstance(robot.table, ScrewTable):
+            links = [b.moved(T) for b, T in zip(links, home_link_frames(robot.chain))]
+        section["links"] = [_body_doc(b, u) for b in links]
+        moving = [j for j in doc["joints"] if j["type"] != "fixed"]
+        for key in FRICTION_FIELDS:
+            values = getattr(model, key)
+            for joint, value in zip(moving, () if values is None else values):
+                if value != 0:
+                    joint[key] = _num(value)
+    if model.payload is not None:
+        section["payload"] = _body_doc(model.payload, u)
+    if not np.array_equal(model.gravity, InertialModel([]).gravity):
+        section["gravity"] = _nums(u.length_from_si(model.gravity))
+    if section:
+        doc["inertia"] = section
 
 
 def _collision_doc(spec: CollisionSpec, u: Units) -> dict:

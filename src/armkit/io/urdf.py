@@ -43,9 +43,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.errors import ModelFileError
+from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import found_text, read_bytes
 from armkit.model.chain import Limits, leader_limits
+from armkit.model.inertia import Inertia
 from armkit.model.urdf import COLLISION_KINDS, URDFCollision, URDFJoint, URDFTable
 from armkit.spatial import pose_from_xyz_rpy
 
@@ -67,6 +68,15 @@ MAX_RATE = 1e6
 
 MAX_AXIS = 1e3
 """The largest axis component (the axis is normalised)."""
+
+MAX_MASS = 1e6
+"""The largest link mass (kg)."""
+
+MAX_INERTIA = 1e6
+"""The largest inertia tensor entry (kg m^2)."""
+
+MAX_TORQUE = 1e7
+"""The largest effort limit (N m or N) and friction (N m, N m s/rad)."""
 
 # A URDF number: ASCII decimal digits only (Python's float() also takes "١٢", "1_0", "nan").
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
@@ -116,8 +126,9 @@ def _limits(element: ET.Element, kind: str, path: str, where: str) -> Limits | N
             raise ModelFileError(path, f"{where} <limit> velocity", "a positive number"
                                  + (" (or 0 on a mimic joint)" if mimic else ""),
                                  found_text(limit.get("velocity")))
+    torque = _effort(limit, element.find("mimic") is not None, path, where)
     if kind == "continuous":
-        return Limits(-np.inf, np.inf, velocity)
+        return Limits(-np.inf, np.inf, velocity, torque=torque)
     if limit is None or limit.get("lower") is None or limit.get("upper") is None:
         raise ModelFileError(path, f"{where} <limit>", "lower and upper for a "
                              f"{kind} joint", "none")
@@ -126,7 +137,37 @@ def _limits(element: ET.Element, kind: str, path: str, where: str) -> Limits | N
     upper = float(_numbers(limit.get("upper"), 1, path, f"{where} <limit> upper", bound)[0])
     if not lower < upper:
         raise ModelFileError(path, f"{where} <limit>", "lower < upper", f"{lower} and {upper}")
-    return Limits(lower, upper, velocity)
+    return Limits(lower, upper, velocity, torque=torque)
+
+
+def _effort(limit: ET.Element | None, mimic: bool, path: str, where: str) -> float:
+    """A moving joint's effort limit (N m or N); inf where none is given, and on a mimic joint
+    whose effort is 0 (its leader's motor drives it)."""
+    if limit is None or limit.get("effort") is None:
+        return np.inf
+    text = limit.get("effort")
+    effort = float(_numbers(text, 1, path, f"{where} <limit> effort", MAX_TORQUE)[0])
+    if effort == 0 and mimic:
+        return np.inf
+    if not effort > 0:
+        raise ModelFileError(path, f"{where} <limit> effort", "a positive number"
+                             + (" (or 0 on a mimic joint)" if mimic else ""), found_text(text))
+    return effort
+
+
+def _friction(element: ET.Element, path: str, where: str) -> tuple[float, float]:
+    """A joint's <dynamics damping friction>: viscous (N m s/rad, N s/m) and Coulomb friction
+    (N m, N), each >= 0; zero where not given."""
+    dynamics = element.find("dynamics")
+    values = []
+    for key in ("damping", "friction"):
+        text = "0" if dynamics is None else dynamics.get(key, "0")
+        value = float(_numbers(text, 1, path, f"{where} <dynamics> {key}", MAX_TORQUE)[0])
+        if value < 0:
+            raise ModelFileError(path, f"{where} <dynamics> {key}", "a number >= 0",
+                                 found_text(text))
+        values.append(value)
+    return values[0], values[1]
 
 
 def _expand_xacro(path: str) -> bytes:
@@ -199,7 +240,9 @@ def _read_joint(item: _Element, path: str) -> URDFJoint:
                      _attribute(origin, "rpy", "0 0 0", 3, path, f"{where} <origin>",
                                 MAX_ANGLE),
                      axis, _limits(element, kind, path, where),
-                     None if item.mimic is None else _mimic(item, path))
+                     None if item.mimic is None else _mimic(item, path),
+                     *(_friction(element, path, where) if kind != "fixed" and item.mimic is None
+                       else (0.0, 0.0)))
 
 
 def _mimic(item: _Element, path: str) -> tuple[str, float, float]:
@@ -310,8 +353,10 @@ def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
         link = item.parent
     chain.reverse()
     collisions, detached = _read_collisions(root, roots[0], chain, parent_joint, path)
+    inertials, carried = _read_inertials(root, roots[0], chain, parent_joint, path)
     return URDFTable(path, tip, tuple(chain), leaders=_leaders(chain, read, path),
-                     collisions=collisions, detached=detached)
+                     collisions=collisions, detached=detached, inertials=inertials,
+                     carried=carried)
 
 
 def _leaders(chain: list[URDFJoint], read: dict[str, _Element], path: str
@@ -404,12 +449,7 @@ def _read_collisions(root: ET.Element, root_link: str, chain: list[URDFJoint],
     frame of the chain link it hangs on (fixed joints merged, as `chain_from_urdf` merges
     them), and the names of the links with <collision> elements that joints off the chain move.
     """
-    anchors = {root_link: 0}                                # link -> chain link index
-    moving = 0
-    for joint in chain:
-        if joint.kind != "fixed":
-            moving += 1
-            anchors[joint.child] = moving
+    anchors = _chain_links(root_link, chain)
     collisions: list[URDFCollision] = []
     detached: list[str] = []
     origins: dict[str, NDArray] = {}                        # fixed joint name -> its origin
@@ -417,26 +457,106 @@ def _read_collisions(root: ET.Element, root_link: str, chain: list[URDFJoint],
         found = element.findall("collision")
         if not found:
             continue
-        link = name = element.get("name")
-        T = np.eye(4)
-        while name not in anchors:
-            item = parent_joint[name]           # every link but the root has one (a tree)
-            if item.kind != "fixed":
-                break
-            if item.name not in origins:      # only its origin matters (checked as on the chain)
-                where = f"joint {found_text(item.name)} <origin>"
-                origin = item.element.find("origin")
-                origins[item.name] = pose_from_xyz_rpy(
-                    _attribute(origin, "xyz", "0 0 0", 3, path, where, MAX_LENGTH),
-                    _attribute(origin, "rpy", "0 0 0", 3, path, where, MAX_ANGLE))
-            T = origins[item.name] @ T
-            name = item.parent
-        if name not in anchors:
+        link = element.get("name")
+        anchor, T = _anchor(link, anchors, parent_joint, origins, path)
+        if anchor is None:
             detached.append(link)
             continue
-        collisions.extend(_read_collision(c, link, k, anchors[name], T, path)
+        collisions.extend(_read_collision(c, link, k, anchor, T, path)
                           for k, c in enumerate(found))
     return tuple(collisions), tuple(detached)
+
+
+def _chain_links(root_link: str, chain: list[URDFJoint]) -> dict[str, int]:
+    """Link name -> chain link index: 0 the root, i the child of the chain's moving joint i."""
+    anchors = {root_link: 0}
+    moving = 0
+    for joint in chain:
+        if joint.kind != "fixed":
+            moving += 1
+            anchors[joint.child] = moving
+    return anchors
+
+
+def _anchor(link: str, anchors: dict[str, int], parent_joint: dict[str, _Element],
+            origins: dict[str, NDArray], path: str) -> tuple[int | None, NDArray]:
+    """The chain link a link hangs on through fixed joints only, and the link's frame in that
+    chain link's URDF frame; (None, ...) for a link that a joint off the chain moves.
+    `origins` keeps the fixed joints' origins read so far (each checked as on the chain)."""
+    name, T = link, np.eye(4)
+    while name not in anchors:
+        item = parent_joint[name]               # every link but the root has one (a tree)
+        if item.kind != "fixed":
+            return None, T
+        if item.name not in origins:
+            where = f"joint {found_text(item.name)} <origin>"
+            origin = item.element.find("origin")
+            origins[item.name] = pose_from_xyz_rpy(
+                _attribute(origin, "xyz", "0 0 0", 3, path, where, MAX_LENGTH),
+                _attribute(origin, "rpy", "0 0 0", 3, path, where, MAX_ANGLE))
+        T = origins[item.name] @ T
+        name = item.parent
+    return anchors[name], T
+
+
+def _read_inertial(element: ET.Element, link: str, path: str) -> Inertia:
+    """A link's <inertial> in its own frame, every number checked."""
+    where = f"link {found_text(link)} <inertial>"
+    origin = element.find("origin")
+    xyz = _attribute(origin, "xyz", "0 0 0", 3, path, f"{where} <origin>", MAX_LENGTH)
+    rpy = _attribute(origin, "rpy", "0 0 0", 3, path, f"{where} <origin>", MAX_ANGLE)
+    mass_element, tensor_element = element.find("mass"), element.find("inertia")
+    if mass_element is None or mass_element.get("value") is None:
+        raise ModelFileError(path, f"{where} <mass>", "<mass value=\"...\"> (kg)", "none")
+    mass = float(_numbers(mass_element.get("value"), 1, path, f"{where} <mass> value",
+                          MAX_MASS)[0])
+    if mass < 0:
+        raise ModelFileError(path, f"{where} <mass> value", "a mass >= 0 kg",
+                             found_text(mass_element.get("value")))
+    if tensor_element is None:
+        raise ModelFileError(path, f"{where} <inertia>", "<inertia ixx=... iyz=...> (kg m^2)",
+                             "none")
+    keys = ("ixx", "iyy", "izz", "ixy", "ixz", "iyz")
+    missing = [key for key in keys if tensor_element.get(key) is None]
+    if missing:
+        raise ModelFileError(path, f"{where} <inertia>", "ixx, iyy, izz, ixy, ixz and iyz",
+                             f"no {', '.join(missing)}")
+    six = [_numbers(tensor_element.get(key), 1, path, f"{where} <inertia> {key}",
+                    MAX_INERTIA)[0] for key in keys]
+    try:
+        inertia = Inertia.from_six(mass, [0.0, 0.0, 0.0], six)
+    except InputError as err:
+        raise ModelFileError(path, f"{where} <inertia>", "a physical inertia tensor (principal "
+                             "moments >= 0)", str(err).split("found ")[-1]) from None
+    return inertia.moved(pose_from_xyz_rpy(xyz, rpy))
+
+
+def _read_inertials(root: ET.Element, root_link: str, chain: list[URDFJoint],
+                    parent_joint: dict[str, _Element], path: str
+                    ) -> tuple[tuple[Inertia | None, ...], tuple[str, ...]]:
+    """Per moving joint of the chain, the <inertial> elements of its child link and of the
+    links hanging on it through fixed joints, merged into one body in the child link's URDF
+    frame (None where none has one); and the names of the links with <inertial> elements
+    that joints off the chain move (not counted: not part of this arm). Links fixed to the
+    root are not read: they never move."""
+    anchors = _chain_links(root_link, chain)
+    bodies: list[Inertia | None] = [None] * (max(anchors.values()) + 1)
+    detached: list[str] = []
+    origins: dict[str, NDArray] = {}
+    for element in root.findall("link"):
+        found = element.find("inertial")
+        if found is None:
+            continue
+        link = element.get("name")
+        anchor, T = _anchor(link, anchors, parent_joint, origins, path)
+        if anchor is None:
+            detached.append(link)
+            continue
+        if anchor == 0:                         # fixed to the base: it never moves
+            continue
+        body = _read_inertial(found, link, path).moved(T)
+        bodies[anchor] = body if bodies[anchor] is None else bodies[anchor] + body
+    return tuple(bodies[1:]), tuple(detached)
 
 
 def _refuse_loops(parent_joint: dict[str, _Element], path: str) -> None:

@@ -47,15 +47,17 @@ def freeze(record, *names: str) -> None:
 
 @dataclass(frozen=True)
 class Limits:
-    """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2).
+    """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2),
+    torque (N m, or N for a prismatic joint).
 
-    Velocity and acceleration are ``inf`` where none is given.
+    Velocity, acceleration and torque are ``inf`` where none is given.
     """
 
     lower: float
     upper: float
     velocity: float = np.inf
     acceleration: float = np.inf
+    torque: float = np.inf
 
     def __post_init__(self):
         if not self.lower < self.upper:
@@ -63,6 +65,8 @@ class Limits:
         if not (self.velocity > 0 and self.acceleration > 0):
             raise InputError(f"limits: expected positive velocity and acceleration limits, "
                              f"found {self.velocity} and {self.acceleration}")
+        if not self.torque > 0:
+            raise InputError(f"limits: expected a positive torque limit, found {self.torque}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,6 +174,8 @@ class Chain:
         Position limits (rad or m); a leader's are narrowed to keep its followers in theirs.
     velocity_limits, acceleration_limits : ndarray, shape (n,)
         Per joint (/s, /s^2); inf where none is given; narrowed for leaders as the positions.
+    torque_limits : ndarray, shape (n,)
+        Per joint value (N m, N); inf where none is given; a leader's own.
     revolute : ndarray of bool, shape (n,)
     coupling : ndarray, shape (n_joints, n)
         d(q of each moving joint)/dq: the identity without mimic joints.
@@ -194,6 +200,7 @@ class Chain:
     upper: NDArray = field(init=False, repr=False)
     velocity_limits: NDArray = field(init=False, repr=False)
     acceleration_limits: NDArray = field(init=False, repr=False)
+    torque_limits: NDArray = field(init=False, repr=False)
     revolute: NDArray = field(init=False, repr=False)
     coupling: NDArray = field(init=False, repr=False)
     screws: NDArray = field(init=False, repr=False)
@@ -229,6 +236,7 @@ class Chain:
         set_("upper", frozen_array([x.upper for x in limits]))
         set_("velocity_limits", frozen_array([x.velocity for x in limits]))
         set_("acceleration_limits", frozen_array([x.acceleration for x in limits]))
+        set_("torque_limits", frozen_array([x.torque for x in limits]))
         revolute = np.array([j.kind == "revolute" for j in variables])
         revolute.setflags(write=False)
         set_("revolute", revolute)
@@ -396,7 +404,7 @@ def leader_limits(limits: Limits, couplings) -> Limits | None:
         lower, upper = max(lower, ends[0]), min(upper, ends[1])
         velocity = min(velocity, own.velocity / abs(m))
         acceleration = min(acceleration, own.acceleration / abs(m))
-    return Limits(lower, upper, velocity, acceleration) if lower < upper else None
+    return Limits(lower, upper, velocity, acceleration, limits.torque) if lower < upper else None
 
 
 @dataclass(frozen=True, eq=False)

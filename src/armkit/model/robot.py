@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.model.chain import Chain
+from armkit.model.inertia import InertialModel, KernelInertia, pack_inertia
 
 
 @dataclass(frozen=True)
@@ -76,6 +77,14 @@ class Robot:
         The source description in SI, kept for display, saving and kinematic calibration.
     collision : CollisionSpec or None
         The collision geometry the robot file declares (`armkit.model.collision`), if any.
+    inertia : InertialModel or None
+        The links' masses and inertias, payload, armature, friction and gravity
+        (`armkit.model.inertia`); None for a robot without them (dynamics then refuse it).
+
+    Attributes
+    ----------
+    dynamics : KernelInertia or None
+        The chain and `inertia` packed for the dynamics kernels, built with the robot.
     """
 
     name: str
@@ -84,6 +93,12 @@ class Robot:
     description: str = ""
     table: object = None
     collision: object = None
+    inertia: InertialModel | None = None
+    dynamics: KernelInertia | None = field(init=False, repr=False, default=None)
+
+    def __post_init__(self):
+        if self.inertia is not None:
+            object.__setattr__(self, "dynamics", pack_inertia(self.chain, self.inertia))
 
     @property
     def n(self) -> int:
@@ -118,6 +133,11 @@ class Robot:
     def acceleration_limits(self) -> NDArray:
         """Acceleration limits (n,), rad/s^2 or m/s^2; inf where the robot's file gives none."""
         return self.chain.acceleration_limits
+
+    @property
+    def torque_limits(self) -> NDArray:
+        """Torque limits (n,), N m or N; inf where the robot's file gives none."""
+        return self.chain.torque_limits
 
     @property
     def sampling_limits(self) -> tuple[NDArray, NDArray]:

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from armkit.errors import ModelFileError
 from armkit.model.chain import Chain, Joint, Limits, freeze
+from armkit.model.inertia import Inertia, InertialModel
 from armkit.spatial import pose_from_xyz_rpy
 
 @dataclass(frozen=True)
@@ -33,6 +34,10 @@ class URDFJoint:
     limits: Limits | None
     mimic: tuple[str, float, float] | None = None
     """(leader, multiplier, offset) of a mimic joint."""
+    damping: float = 0.0
+    """Viscous friction, ``<dynamics damping>`` (N m s/rad, N s/m); 0 on a mimic joint."""
+    friction: float = 0.0
+    """Coulomb friction, ``<dynamics friction>`` (N m, N); 0 on a mimic joint."""
 
 
 COLLISION_KINDS = ("box", "cylinder", "sphere", "mesh")
@@ -90,6 +95,11 @@ class URDFTable:
     """Joints off the chain that mimic joints of the chain follow."""
     collisions: tuple[URDFCollision, ...] = ()
     detached: tuple[str, ...] = ()
+    inertials: tuple[Inertia | None, ...] = ()
+    """Per moving joint of the chain, the <inertial> elements of its child link and of the
+    links fixed to it, as one body in the child link's frame; None where none has one."""
+    carried: tuple[str, ...] = ()
+    """Links with <inertial> elements that joints off the chain move (not counted)."""
 
     def __post_init__(self):
         freeze(self, "T_base", "T_tool")
@@ -120,3 +130,17 @@ def chain_from_urdf(table: URDFTable) -> Chain:
     leaders = [Joint(j.name, "prismatic" if j.kind == "prismatic" else "revolute", j.axis,
                      j.limits) for j in table.leaders]
     return Chain(joints, table.T_base, pending @ table.T_tool, leaders)
+
+
+def inertia_from_urdf(table: URDFTable, chain: Chain) -> InertialModel | None:
+    """The inertial model of a URDF table's chain (`chain_from_urdf`'s): each moving joint's
+    body from `URDFTable.inertials` (a body without <inertial> weighs nothing, as URDF
+    defines it), friction from the independent joints' <dynamics>; None if no moving body has
+    an <inertial> element."""
+    if not any(x is not None for x in table.inertials):
+        return None
+    links = [Inertia(0.0) if x is None else x for x in table.inertials]
+    joints = {j.name: j for j in (*table.joints, *table.leaders)}
+    viscous = [joints[name].damping for name in chain.names]
+    coulomb = [joints[name].friction for name in chain.names]
+    return InertialModel(links, viscous=viscous, coulomb=coulomb)

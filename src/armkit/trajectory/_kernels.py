@@ -397,15 +397,18 @@ def profile_pieces(order, times, values, q0, tol):
 
 # --- TOPP-RA (retime.py) -----------------------------------------------------------------------
 # Path q(s) on a grid s_0 < ... < s_N; unknowns x_i = sdot^2 at s_i and u_i = sddot on
-# [s_i, s_{i+1}], with x_{i+1} = x_i + 2 ds_i u_i. Stage i's constraints are rows
-# alpha u + beta x <= gamma: joint accelerations q' u + q'' x within +-amax at s_i and, with
-# x_{i+1} put in, at s_{i+1} (toppra's "interpolation" discretisation), and x_{i+1} inside the
-# next controllable set [lo, hi]: the rows (2 ds, 1, hi) and (-2 ds, -1, -lo).
+# [s_i, s_{i+1}], with x_{i+1} = x_i + 2 ds_i u_i. A constraint channel k is a quantity
+# a_k(s) u + b_k(s) x + c_k(s) held within +-U_k(s): a joint's acceleration (a = q', b = q'',
+# c = 0) or its torque (a = M q', b = M q'' + C(q, q') q', c = g(q)). Stage i holds every
+# channel at both ends of its interval, at s_{i+1} with x_{i+1} put in (toppra's
+# "interpolation" discretisation), as rows alpha u + beta x <= gamma, and keeps x_{i+1} inside
+# the next controllable set [lo, hi]: the rows (2 ds, 1, hi) and (-2 ds, -1, -lo).
 # The x a stage allows is found by Fourier-Motzkin: u is bounded below by the rows with
 # alpha < 0 and above by those with alpha > 0; a pair (k below, l above) is compatible iff
-# g x <= h, g = beta_k alpha_l - beta_l alpha_k, h = gamma_k alpha_l - gamma_l alpha_k. Only
-# the pairs with a row of the next set depend on the pass: the pairs of joint rows are taken
-# for every stage first (`_joint_rows_numpy`), and the pass is then linear in the rows.
+# g x <= h, g = beta_k alpha_l - beta_l alpha_k, h = gamma_k alpha_l - gamma_l alpha_k; a row
+# with alpha = 0 bounds x alone. Only the pairs with a row of the next set depend on the pass:
+# the pairs of channel rows are taken for every stage first (`_channel_rows_numpy`), and the
+# pass is then linear in the rows.
 
 @_inline
 def _narrow(least, largest, g, h):
@@ -420,15 +423,23 @@ def _narrow(least, largest, g, h):
     return least, largest
 
 
-def _joint_rows_numpy(dq, ddq, amax, ds, xv):
-    """Each stage's joint-acceleration rows, and the x their pairs alone allow (NumPy).
+def narrow_all(lo, hi, g, h, axis):
+    """`_narrow` of [lo, hi] by every row (g, h) along `axis` at once (NumPy)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bound = h / g
+    hi = np.minimum(hi, np.where(g > 0.0, bound, np.inf).min(axis=axis))
+    lo = np.maximum(lo, np.where(g < 0.0, bound, -np.inf).max(axis=axis))
+    none = ((g == 0.0) & (h < 0.0)).any(axis=axis)
+    return np.where(none, np.maximum(lo, 1.0), lo), np.where(none, np.minimum(hi, 0.0), hi)
+
+
+def _channel_rows_numpy(a, b, c, bound, ds, xv):
+    """Each stage's channel rows, and the x their pairs alone allow (NumPy).
 
     Parameters
     ----------
-    dq, ddq : (N + 1, n) arrays
-        q'(s) and q''(s) at the grid points.
-    amax : (n,) array
-        Joint acceleration limits.
+    a, b, c, bound : (N + 1, m) arrays
+        Each channel's a(s), b(s), c(s) and bound U(s) > 0 at the grid points.
     ds : (N,) array
         Grid steps.
     xv : (N + 1,) array
@@ -436,57 +447,60 @@ def _joint_rows_numpy(dq, ddq, amax, ds, xv):
 
     Returns
     -------
-    rows : (N, 2, 2 n, 3) array
+    rows : (N, 2, 2 m, 3) array
         Per stage, the rows (alpha, beta, gamma) that bound u from below (``[:, 0]``,
         alpha < 0) and from above (``[:, 1]``, alpha > 0), at s_i then s_{i+1}; alpha = 0
-        where q' = 0.
+        where a = 0 (such a channel bounds x alone, in `allowed`).
     allowed : (N, 2) array
-        Per stage, the least and largest x in [0, xv] the joint rows allow; least > largest
+        Per stage, the least and largest x in [0, xv] the channel rows allow; least > largest
         where they allow none.
     """
-    a = np.concatenate([dq[:-1], dq[1:] + 2.0 * ds[:, None] * ddq[1:]], axis=1)
-    b = np.concatenate([ddq[:-1], ddq[1:]], axis=1)
-    gamma = np.broadcast_to(np.concatenate([amax, amax]), a.shape)
-    up = np.stack([np.abs(a), np.sign(a) * b, gamma], axis=-1)   # +-(a, b), alpha >= 0
-    rows = np.stack([-up, up], axis=1)
-    rows[:, 0, :, 2] = gamma
-    # Rows with alpha = 0 (q' = 0) bound x directly: b x <= amax and -b x <= amax.
-    flat = (a == 0.0) & (b != 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        hi = np.minimum(xv[:-1], np.where(flat, gamma / np.abs(b), np.inf).min(axis=1))
-        below, above = rows[:, 0, :, None, :], rows[:, 1, None, :, :]
-        g = below[..., 1] * above[..., 0] - above[..., 1] * below[..., 0]
-        h = below[..., 2] * above[..., 0] - above[..., 2] * below[..., 0]
-        pair = (below[..., 0] < 0.0) & (above[..., 0] > 0.0)
-        bound = h / g
-    hi = np.minimum(hi, np.where(pair & (g > 0.0), bound, np.inf).min(axis=(1, 2)))
-    lo = np.maximum(0.0, np.where(pair & (g < 0.0), bound, -np.inf).max(axis=(1, 2)))
-    none = (pair & (g == 0.0) & (h < 0.0)).any(axis=(1, 2))
-    lo[none], hi[none] = np.maximum(lo[none], 1.0), np.minimum(hi[none], 0.0)
+    alpha = np.concatenate([a[:-1], a[1:] + 2.0 * ds[:, None] * b[1:]], axis=1)
+    beta = np.concatenate([b[:-1], b[1:]], axis=1)
+    offset = np.concatenate([c[:-1], c[1:]], axis=1)
+    gamma = np.concatenate([bound[:-1], bound[1:]], axis=1)
+    sign = np.sign(alpha)
+    up = np.stack([np.abs(alpha), sign * beta, gamma - sign * offset], axis=-1)
+    down = np.stack([-np.abs(alpha), -sign * beta, gamma + sign * offset], axis=-1)
+    rows = np.stack([down, up], axis=1)
+    # Rows with alpha = 0 bound x directly: beta x + offset within +-gamma.
+    flat = alpha == 0.0
+    lo, hi = narrow_all(np.zeros(alpha.shape[0]), xv[:-1],
+                           np.where(flat, beta, 0.0), np.where(flat, gamma - offset, 0.0), 1)
+    lo, hi = narrow_all(lo, hi, np.where(flat, -beta, 0.0),
+                           np.where(flat, gamma + offset, 0.0), 1)
+    below, above = rows[:, 0, :, None, :], rows[:, 1, None, :, :]
+    g = below[..., 1] * above[..., 0] - above[..., 1] * below[..., 0]
+    h = below[..., 2] * above[..., 0] - above[..., 2] * below[..., 0]
+    pair = (below[..., 0] < 0.0) & (above[..., 0] > 0.0)
+    lo, hi = narrow_all(lo, hi, np.where(pair, g, 0.0), np.where(pair, h, 0.0), (1, 2))
     return rows, np.column_stack([lo, hi])
 
 
 @_jit
-def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
-    """`_joint_rows_numpy` as loops, filling `rows` and `allowed` (the compiled tier)."""
-    N, n = ds.shape[0], dq.shape[1]
+def _channel_rows(a, b, c, bound, ds, xv, rows, allowed):
+    """`_channel_rows_numpy` as loops, filling `rows` and `allowed` (the compiled tier)."""
+    N, m = ds.shape[0], a.shape[1]
     for i in range(N):
         least, largest = 0.0, xv[i]
-        for k in range(2 * n):
-            j = k % n
-            if k < n:
-                a, b = dq[i, j], ddq[i, j]
+        for k in range(2 * m):
+            j = k % m
+            if k < m:
+                al, be, of, ga = a[i, j], b[i, j], c[i, j], bound[i, j]
             else:
-                a, b = dq[i + 1, j] + 2.0 * ds[i] * ddq[i + 1, j], ddq[i + 1, j]
-            sign = 1.0 if a > 0.0 else -1.0 if a < 0.0 else 0.0
-            rows[i, 1, k, 0], rows[i, 1, k, 1], rows[i, 1, k, 2] = abs(a), sign * b, amax[j]
-            rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2] = -abs(a), -(sign * b), amax[j]
-            if a == 0.0 and b != 0.0:
-                largest = min(largest, amax[j] / abs(b))
-        for k in range(2 * n):
+                al = a[i + 1, j] + 2.0 * ds[i] * b[i + 1, j]
+                be, of, ga = b[i + 1, j], c[i + 1, j], bound[i + 1, j]
+            sign = 1.0 if al > 0.0 else -1.0 if al < 0.0 else 0.0
+            rows[i, 1, k, 0], rows[i, 1, k, 1], rows[i, 1, k, 2] = abs(al), sign * be, ga - sign * of
+            rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2] = (-abs(al), -(sign * be),
+                                                                    ga + sign * of)
+            if al == 0.0:
+                least, largest = _narrow(least, largest, be, ga - of)
+                least, largest = _narrow(least, largest, -be, ga + of)
+        for k in range(2 * m):
             alpha_k, beta_k, gamma_k = rows[i, 0, k, 0], rows[i, 0, k, 1], rows[i, 0, k, 2]
-            for m in range(2 * n):
-                alpha_l, beta_l, gamma_l = rows[i, 1, m, 0], rows[i, 1, m, 1], rows[i, 1, m, 2]
+            for l in range(2 * m):
+                alpha_l, beta_l, gamma_l = rows[i, 1, l, 0], rows[i, 1, l, 1], rows[i, 1, l, 2]
                 if alpha_k < 0.0 and alpha_l > 0.0:
                     least, largest = _narrow(least, largest, beta_k * alpha_l - beta_l * alpha_k,
                                              gamma_k * alpha_l - gamma_l * alpha_k)
@@ -496,7 +510,7 @@ def _joint_rows(dq, ddq, amax, ds, xv, rows, allowed):
 @_jit
 def _pass(rows, allowed, ds, end_top, free_start, x):
     """Backward pass (controllable sets), then the greedy forward pass; x is filled (see
-    `topp`; `rows` and `allowed` are `_joint_rows_numpy`'s)."""
+    `topp`; `rows` and `allowed` are `_channel_rows_numpy`'s)."""
     N, m = ds.shape[0], rows.shape[2]
     lo, hi = np.empty(N + 1), np.empty(N + 1)
     lo[N], hi[N] = 0.0, end_top
@@ -529,22 +543,23 @@ def _pass(rows, allowed, ds, end_top, free_start, x):
     return -1
 
 
-def _topp_numpy(dq, ddq, xv, amax, ds, end_top, free_start, x):
-    """`topp` for a light call: the joint rows in NumPy, then the pass as Python."""
-    rows, allowed = _joint_rows_numpy(dq, ddq, amax, ds, xv)
+def _topp_numpy(a, b, c, bound, xv, ds, end_top, free_start, x):
+    """`topp` for a light call: the channel rows in NumPy, then the pass as Python."""
+    rows, allowed = _channel_rows_numpy(a, b, c, bound, ds, xv)
     return _pass(rows, allowed, ds, end_top, free_start, x)
 
 
 @kernel(cache=True, nogil=True, python=_topp_numpy)
-def topp(dq, ddq, xv, amax, ds, end_top, free_start, x):
+def topp(a, b, c, bound, xv, ds, end_top, free_start, x):
     """Backward pass (controllable sets), then the greedy forward pass; x (N + 1,) is filled.
 
-    dq, ddq (N + 1, n) are q'(s) and q''(s) at the grid points, xv (N + 1,) their velocity
-    bound on x, amax (n,) the joint acceleration limits, ds (N,) the grid steps. The end set
-    is [0, end_top]; the start is x = 0, or with free_start the largest controllable x.
-    Returns -1 on success, else the first grid index where the path cannot be followed.
+    a, b, c, bound (N + 1, m) are the constraint channels at the grid points (each holds
+    ``|a u + b x + c| <= bound``), xv (N + 1,) the velocity bound on x, ds (N,) the grid
+    steps. The end set is [0, end_top]; the start is x = 0, or with free_start the largest
+    controllable x. Returns -1 on success, else the first grid index where the path cannot
+    be followed.
     """
-    N, n = ds.shape[0], dq.shape[1]
-    rows, allowed = np.empty((N, 2, 2 * n, 3)), np.empty((N, 2))
-    _joint_rows(dq, ddq, amax, ds, xv, rows, allowed)
+    N, m = ds.shape[0], a.shape[1]
+    rows, allowed = np.empty((N, 2, 2 * m, 3)), np.empty((N, 2))
+    _channel_rows(a, b, c, bound, ds, xv, rows, allowed)
     return _pass(rows, allowed, ds, end_top, free_start, x)
