@@ -86,8 +86,9 @@ class MapChunk:
 class Checkpoint(Protocol):
     """Where a map keeps its finished chunks (`armkit.io.reach_maps.ChunkFolder`)."""
 
-    def start(self, key: str, chunks: int) -> dict[int, MapChunk]:
-        """Begin (or resume) the map of settings `key`: the chunks finished before."""
+    def start(self, key: str, sizes: list[int], orientations: int) -> dict[int, MapChunk]:
+        """Begin (or resume) the map of settings `key`, whose chunk i holds sizes[i] voxels of
+        `orientations` each: the chunks finished before, by index."""
 
     def save(self, index: int, chunk: MapChunk) -> None:
         """Keep chunk `index`, finished."""
@@ -571,7 +572,8 @@ def reach_map(robot: Robot, resolution: float | None = None,
     key = settings_key(plan)
     results: dict[int, MapChunk] = {}
     if checkpoint is not None:
-        results.update(checkpoint.start(key, plan.chunks))
+        results.update(checkpoint.start(key, [plan.size(i) for i in range(plan.chunks)],
+                                        K))
     done = sum(plan.size(i) for i in results)
     if progress is not None:
         progress(done, len(voxels))
@@ -602,6 +604,7 @@ def reach_map(robot: Robot, resolution: float | None = None,
     settings = {"method": method, "restarts": restarts, "seed": seed, "samples": samples,
                 "chunk": chunk, "obstacles": None if scene is None else len(scene),
                 "collision_resolution": collision_resolution, "key": key,
+                "robot": robot_key(robot),
                 "armkit": __version__}
     return ReachMap(robot, h, orientations=chosen, settings=settings, **arrays)
 
@@ -631,21 +634,29 @@ def _method(solver: IKSolver, orientations: Orientations, method: str) -> str:
     return method
 
 
-def settings_key(plan: _Plan) -> str:
-    """A hash of everything a map's chunks depend on: the chain, limits, voxels, orientations,
-    solver settings and the collision model."""
+def _digest(arrays: list, extra: tuple) -> str:
     digest = hashlib.sha256()
-    k = plan.robot.chain.kernel
-    arrays = [k.floats, k.ints, *plan.robot.sampling_limits, plan.robot.lower,
-              plan.robot.upper, plan.voxels, plan.orientations.rotations,
-              plan.orientations.mask]
-    if plan.scene is not None:
-        arrays += list(_tools(plan).checker.model)
     for a in arrays:
         a = np.ascontiguousarray(a)
         digest.update(f"{a.dtype.str}{a.shape}".encode())
         digest.update(a.tobytes())
-    digest.update(repr((plan.resolution, plan.orientations.frame, plan.method, plan.restarts,
-                        plan.seed, plan.chunk, plan.scene is not None,
-                        plan.collision_resolution)).encode())
+    digest.update(repr(extra).encode())
     return digest.hexdigest()
+
+
+def robot_key(robot: Robot) -> str:
+    """A hash of what a map depends on of a robot: its packed chain (kinematics, base and
+    tool) and its joint limits."""
+    k = robot.chain.kernel
+    return _digest([k.floats, k.ints, robot.lower, robot.upper, *robot.sampling_limits], ())
+
+
+def settings_key(plan: _Plan) -> str:
+    """A hash of everything a map's chunks depend on: the robot (`robot_key`), voxels,
+    orientations, solver settings and the collision model."""
+    arrays = [plan.voxels, plan.orientations.rotations, plan.orientations.mask]
+    if plan.scene is not None:
+        arrays += list(_tools(plan).checker.model)
+    return _digest(arrays, (robot_key(plan.robot), plan.resolution, plan.orientations.frame,
+                            plan.method, plan.restarts, plan.seed, plan.chunk,
+                            plan.scene is not None, plan.collision_resolution))
