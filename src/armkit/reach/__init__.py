@@ -8,6 +8,8 @@ reaches every pose of a task (a `Placement`).
 
 from armkit.reach.maps import IndexSection, MapChunk, ReachMap, reach_map
 from armkit.reach.orientations import Orientations, default_orientations
+from armkit.reach.placement import BaseGrid, Placement, base_placement, floor_grid, rail_grid
 
 __all__ = ["reach_map", "ReachMap", "MapChunk", "IndexSection", "Orientations",
-           "default_orientations"]
+           "default_orientations", "base_placement", "Placement", "BaseGrid", "floor_grid",
+           "rail_grid"]
