@@ -191,7 +191,8 @@ class Placement:
         solution).
     yaw_margin : float
         rad: how far the best base's yaw may turn, either way, before a pose is lost (pi if
-        every yaw of the grid works there); NaN without a best base.
+        every yaw of a full turn works there; else at least to the end of the grid's yaws);
+        NaN without a best base.
     criterion : {"reachability", "manipulability"}
     mask : str
         The IK task.
@@ -391,15 +392,19 @@ def _margins(grid: BaseGrid, feasible: NDArray) -> NDArray:
 
 
 def _yaw_margin(grid: BaseGrid, feasible: NDArray, best: int) -> float:
-    """How far the best base may turn before a pose is lost, at its position (rad)."""
+    """How far the best base may turn, either way, before a pose is lost, at its position
+    (rad): to the nearest yaw of the grid that fails there; where none fails, pi if the
+    grid's yaws go round a full turn, else to the end of their range (a lower bound)."""
     ok = feasible.reshape(-1, grid.shape[-1])
     row, k = divmod(best, grid.shape[-1])
     yaws = grid.axes["yaw"]
     bad = ~ok[row]
-    if not bad.any():
-        return math.pi if len(yaws) > 1 else 0.0
-    turn = np.abs((yaws[bad] - yaws[k] + math.pi) % (2 * math.pi) - math.pi)
-    return float(turn.min())
+    if bad.any():
+        turn = np.abs((yaws[bad] - yaws[k] + math.pi) % (2 * math.pi) - math.pi)
+        return float(turn.min())
+    if len(yaws) > 1 and math.isclose(len(yaws) * (yaws[1] - yaws[0]), 2 * math.pi):
+        return math.pi
+    return float(min(yaws[k] - yaws[0], yaws[-1] - yaws[k]))
 
 
 def _why_none(reached: NDArray, reachability: NDArray, names: tuple) -> str:
