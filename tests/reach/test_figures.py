@@ -91,6 +91,7 @@ def test_a_rail_placement_plots_the_score_along_the_rail(water_map):
     assert ax.get_ylabel() == "worst pose's reachability index"
     line = ax.get_lines()[0]
     np.testing.assert_allclose(line.get_xdata(), grid.axes["s"] * 1000)
-    chosen = [t.get_text() for t in ax.get_legend().get_texts() if t.get_text().startswith("chosen")]
+    chosen = [t.get_text() for t in ax.get_legend().get_texts()
+              if t.get_text().startswith("chosen")]
     s = grid.axes["s"][placement.best] * 1000
     assert chosen == [f"chosen: s = {s:.6g} mm"]

@@ -12,7 +12,7 @@ import pytest
 import armkit
 from armkit.errors import InputError
 from armkit.reach import Orientations, reach_map
-from armkit.reach.maps import chunk_targets, dilated, manipulability_of, voxel_keys
+from armkit.reach.maps import dilated, manipulability_of, voxel_keys, voxel_targets
 from tests.helpers import random_q
 
 UR5 = armkit.robot("ur5")
@@ -161,14 +161,12 @@ def test_compiled_manipulability_is_armkits(name):
                                rtol=1e-9, atol=1e-13)
 
 
-def test_chunk_targets_are_voxel_centres_in_every_orientation(ur5_map):
-    from armkit.reach.maps import _Plan
-
+def test_targets_are_voxel_centres_in_every_orientation(ur5_map):
     m = ur5_map
-    plan = _Plan(UR5, m.resolution, m.voxels, m.orientations, "analytic", 0, 0, 7, None, 0.005)
-    T = chunk_targets(plan, 2).reshape(7, 50, 4, 4)
+    T = voxel_targets(UR5, m.centers[14:21], m.orientations).reshape(7, 50, 4, 4)
     np.testing.assert_array_equal(T[:, :, :3, 3], np.repeat(m.centers[14:21, None], 50, 1))
     np.testing.assert_array_equal(T[3, :, :3, :3], m.orientations.rotations)
+    np.testing.assert_array_equal(T[..., 3, :], np.broadcast_to([0, 0, 0, 1], (7, 50, 4)))
 
 
 def test_sections_show_the_index():

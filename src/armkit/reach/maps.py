@@ -350,11 +350,10 @@ def _tools(plan: _Plan) -> _Tools:
     return _Tools(IKSolver(plan.robot, threads=1), checker, 0.5 * (low + high))
 
 
-def chunk_targets(plan: _Plan, index: int) -> NDArray:
-    """The IK targets (v K, 4, 4) of chunk `index`: each voxel centre with every orientation."""
-    first = index * plan.chunk
-    centers = (plan.voxels[first:first + plan.size(index)] + 0.5) * plan.resolution
-    R = plan.orientations.in_base(centers, plan.robot)
+def voxel_targets(robot: Robot, centers: NDArray, orientations: Orientations) -> NDArray:
+    """IK targets (V K, 4, 4): each voxel centre (V, 3) with every orientation, voxel by
+    voxel."""
+    R = orientations.in_base(centers, robot)
     T = np.zeros(R.shape[:2] + (4, 4))
     T[..., :3, :3] = R
     T[..., :3, 3] = centers[:, None]
@@ -364,7 +363,9 @@ def chunk_targets(plan: _Plan, index: int) -> NDArray:
 
 def _solve_chunk(plan: _Plan, tools: _Tools, index: int) -> MapChunk:
     """IK for every (voxel, orientation) of chunk `index`, reduced per voxel."""
-    T = chunk_targets(plan, index)
+    first = index * plan.chunk
+    centers = (plan.voxels[first:first + plan.size(index)] + 0.5) * plan.resolution
+    T = voxel_targets(plan.robot, centers, plan.orientations)
     robot, mask = plan.robot, plan.orientations.mask
     if plan.method == "analytic":
         q_ref = np.broadcast_to(tools.q_ref, (len(T), robot.n)).copy()

@@ -114,13 +114,19 @@ class Orientations:
         count : int
             About this many orientations in all (the product of directions and rolls).
         rolls : int, optional
-            Rolls per direction, evenly over one turn. Default: ``round((pi count)^(1/3))``,
-            which spaces rolls as far apart as neighbouring directions (8 rolls of 45 deg and
-            25 directions about 41 deg apart for 200).
+            Rolls per direction, evenly over one turn. Default: near ``(pi count)^(1/3)``,
+            which spaces rolls as far apart as neighbouring directions, and dividing the count
+            where one of the nearest does (8 rolls of 45 deg and 25 directions about 41 deg
+            apart for 200).
         """
         count = _count("orientations", count)
         if rolls is None:
-            rolls = max(1, round((math.pi * count) ** (1 / 3)))
+            # As many rolls as keep them as far apart as neighbouring directions; among the
+            # five nearest that number, one that divides the count, so that it is met.
+            ideal = (math.pi * count) ** (1 / 3)
+            near = sorted(range(max(1, round(ideal) - 2), round(ideal) + 3),
+                          key=lambda r: (count % r != 0, abs(r - ideal)))
+            rolls = min(near[0], count)
         rolls = _count("rolls", rolls, count)
         directions = max(1, round(count / rolls))
         R = rolled(fibonacci_sphere(directions), rolls, axis=2)

@@ -17,6 +17,7 @@ from matplotlib.patches import Patch
 
 from armkit.model.robot import Units
 from armkit.reach import Placement, ReachMap
+from armkit.report.workspace import label_section
 
 _CMAP = "viridis"
 _OUTSIDE = "#e8e8e8"        # cells the map holds no voxel for
@@ -59,19 +60,10 @@ def map_figure(m: ReachMap, height: float | None = None, azimuth: float = 0.0,
         image = ax.imshow(np.ma.masked_invalid(section.index), origin="lower", cmap=cmap,
                           vmin=0.0, vmax=1.0, extent=units.length_from_si(section.extent),
                           interpolation="nearest")
-        if section.plane == "horizontal":
-            where = f"z = {units.length_from_si(section.position):.6g} {unit}"
-            ax.set_xlabel(f"x ({unit})")
-            ax.set_ylabel(f"y ({unit})")
-        else:
-            where = (f"vertical plane through the z axis, azimuth "
-                     f"{units.angle_from_si(section.position):.6g} {units.angle}")
-            ax.set_xlabel(f"r ({unit}), signed distance from the z axis")
-            ax.set_ylabel(f"z ({unit})")
         ax.scatter([0], [0], **_BASE)
         ax.set_aspect("equal")
         ax.grid(alpha=0.3)
-        ax.set_title(where)
+        ax.set_title(label_section(ax, section, units))
         ax.legend(handles=[Line2D([], [], marker="+", ls="", color="tab:red", ms=8,
                                   label="base origin"),
                            Patch(color=_OUTSIDE, label="outside the map")],
