@@ -41,14 +41,8 @@ from armkit.kinematics.ik import IKSolver
 from armkit.kinematics.ik.analytic import candidates
 from armkit.model.robot import Robot
 from armkit.reach.orientations import Orientations, default_orientations
-from armkit.sampled_workspace import (
-    dask_client,
-    default_resolution,
-    finite_number,
-    reach_bound,
-    whole_number,
-    workspace,
-)
+from armkit.sampled_workspace import (dask_client, default_resolution, finite_number,
+                                      reach_bound, whole_number, workspace)
 from armkit.threads import get_num_threads
 
 TARGETS_PER_CHUNK = 16_384      # IK problems per chunk: about 50 ms of closed-form work
@@ -141,8 +135,9 @@ class ReachMap:
         all six rows); 0 where nothing is reached.
     orientations : Orientations
     settings : dict
-        How the map was made: method, restarts, seed, samples, chunk, scene, collision
-        resolution, key (a hash of everything the result depends on), armkit version.
+        How the map was made: method, restarts, seed, samples, chunk, obstacles (their
+        number, or None without a scene), collision_resolution, key (a hash of everything the
+        chunks depend on), robot (`robot_key`) and armkit (the version).
     """
 
     robot: Robot
@@ -180,9 +175,9 @@ class ReachMap:
         ijk = np.floor(p / self.resolution)
         inside = np.all(np.abs(ijk) < _OFFSET - 1, axis=-1) & np.isfinite(p).all(axis=-1)
         keys = voxel_keys(np.where(inside[..., None], ijk, 0).astype(np.int64))
-        row = np.searchsorted(self._keys, keys).clip(max=max(len(self._keys) - 1, 0))
-        hit = inside & (self._keys[row] == keys) if len(self._keys) else np.zeros_like(inside)
-        return np.where(hit, row, -1)
+        known = voxel_keys(self.voxels)                 # sorted: the voxels are lexicographic
+        row = np.searchsorted(known, keys).clip(max=len(known) - 1)
+        return np.where(inside & (known[row] == keys), row, -1)
 
     def index_at(self, p: ArrayLike) -> NDArray:
         """The reachability index (...,) of the voxel holding each point p (..., 3); 0 outside
@@ -207,10 +202,6 @@ class ReachMap:
         bit = (self.reached[safe, k // 8] >> (k % 8)) & 1
         return (np.where(row >= 0, self.index[safe], 0.0),
                 (row >= 0) & (bit == 1))
-
-    @property
-    def _keys(self) -> NDArray:
-        return voxel_keys(self.voxels)
 
     def horizontal_section(self, height: float) -> IndexSection:
         """The index in the voxel layer holding the plane ``z = height`` (m)."""
@@ -398,9 +389,9 @@ def _chunk_seed(seed: int, index: int) -> int:
 def _run_local(plan: _Plan, todo: list[int], threads: int, finished: Callable) -> None:
     """Chunks `todo` on `threads` threads (the kernels release the GIL); the first alone, so
     that it compiles the kernels once, before the threads share them."""
-    tools = _tools(plan)
     if not todo:
         return
+    tools = _tools(plan)
     finished(todo[0], _solve_chunk(plan, tools, todo[0]))
     rest = iter(todo[1:])
     if threads <= 1:
