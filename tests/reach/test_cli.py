@@ -7,6 +7,7 @@ import json
 import string
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,11 +17,13 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import armkit
+import armkit.io.scene
 from armkit.cli import app
 from armkit.io.reach_maps import ChunkFolder, read_map
 from armkit.reach import reach_map
 
 runner = CliRunner()
+ROOT = Path(__file__).resolve().parents[2]
 WATER = armkit.robot("water_supply")
 TASK = {"units": {"length": "mm", "angle": "deg"},
         "poses": [{"name": "stop 1", "xyz": [1200, 900, 800], "yaw": -90},
@@ -64,6 +67,20 @@ def test_reach_prints_a_summary(tmp_path):
     assert "voxels of 0.25 m x 20 orientations (" in text and "task pose): " in text
     assert "IK problems (analytic)" in text and "reachable: " in text
     assert f"map: {tmp_path / 'ur5_reach.npz'}" in text
+
+
+def test_reach_with_a_scene_counts_collision_free_solutions(tmp_path):
+    shelf = armkit.io.scene.read_scene(ROOT / "examples" / "shelf.scene.yaml")
+    result = run("reach", "inspection_6dof", "--resolution", "300", "--orientations", "8",
+                 "--scene", ROOT / "examples" / "shelf.scene.yaml", "--out", tmp_path, "--json")
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert doc["obstacles"] == len(shelf) > 0
+    arm = armkit.robot("inspection_6dof")
+    m = read_map(doc["map"], arm)
+    expected = reach_map(arm, 0.3, 8, scene=shelf)
+    assert np.array_equal(m.count, expected.count)
+    assert m.count.sum() < reach_map(arm, 0.3, 8).count.sum()
 
 
 def test_reach_resumes_an_interrupted_map(tmp_path):

@@ -205,3 +205,32 @@ def test_analytic_needs_a_closed_form():
         reach_map(armkit.robot("panda"), 0.3, 4, method="analytic", samples=1000)
     with pytest.raises(InputError, match="robot: expected a Robot"):
         reach_map("ur5", 0.3, 4)
+
+
+def test_with_a_scene_only_collision_free_solutions_count():
+    from armkit.planning import Box, CollisionChecker, Scene
+
+    table = Scene([Box.from_bounds([0.25, -0.4, -0.2], [0.7, 0.4, 0.05], "table")])
+    orientations = Orientations.sphere(16)
+    free = reach_map(UR5, 0.15, orientations, samples=200_000)
+    blocked = reach_map(UR5, 0.15, orientations, samples=200_000, scene=table)
+    assert blocked.settings["obstacles"] == 1 and free.settings["obstacles"] is None
+    assert np.all(blocked.count <= free.count) and blocked.count.sum() < free.count.sum()
+    # Voxel by voxel, brute force: every closed-form solution within the limits, then the
+    # checker; a voxel inside the table reaches nothing.
+    checker = CollisionChecker(UR5, table)
+    solver = armkit.IKSolver(UR5)
+    changed = np.flatnonzero(blocked.count < free.count)
+    rows = np.union1d(changed[::max(1, len(changed) // 25)], np.arange(0, len(free.voxels), 97))
+    for v in rows:
+        T = np.tile(np.eye(4), (len(orientations), 1, 1))
+        T[:, :3, :3] = orientations.rotations
+        T[:, :3, 3] = blocked.centers[v]
+        sols = solver.solutions(T)
+        usable = sols.valid & sols.within_limits
+        ok = np.zeros_like(usable)
+        ok[usable] = checker.valid(sols.q[usable])
+        np.testing.assert_array_equal(blocked.reached_at(v), ok.any(axis=1))
+    inside = np.all((blocked.centers > [0.25, -0.4, -0.2]) & (blocked.centers < [0.7, 0.4, 0.05]),
+                    axis=1)
+    assert inside.any() and (blocked.count[inside] == 0).all()
