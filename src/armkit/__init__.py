@@ -33,6 +33,7 @@ _HOMES = {
                      "spline", "tool_motion", "RetimeResult"), "armkit.trajectory"),
     **dict.fromkeys(("Section", "Workspace", "workspace"), "armkit.sampled_workspace"),
     **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
+    "warm_up": "armkit.warmup",
     **dict.fromkeys(("load_register_map", "check_waypoints", "send_waypoints", "DriveClient",
                      "SimDrive"), "armkit.drives"),
     **dict.fromkeys(("handeye", "HandEyeResult", "calibrate", "CalibrationResult",
@@ -66,6 +67,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.threads import get_num_threads, set_num_threads
     from armkit.trajectory import (RetimeResult, Trajectory, cubic, jerk_limited, quintic,
                                    retime, spline, tool_motion, trapezoidal)
+    from armkit.warmup import warm_up
 
 
 __getattr__, __dir__ = lazy_names(__name__, _HOMES)

@@ -49,7 +49,7 @@ class Task:
         A point cloud of the inlet (path, kind, radius m or None, units), searched by
         `armkit.perception.detect_target` when the job runs.
     mask : str or None
-        The IK task (a name of `armkit.kinematics.ik.task.NAMED_MASKS`); None: the robot's own.
+        The IK task (a name of `armkit.kinematics.ik.masks.NAMED_MASKS`); None: the robot's own.
     start : ndarray (n,) or None
         Where the simulated drive starts (a real drive reports where the arm is).
     scene : armkit.planning.Scene

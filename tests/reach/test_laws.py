@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import armkit
-from armkit.kinematics.ik.task import task_errors
+from armkit.kinematics.ik.masks import task_errors
 from armkit.reach import Orientations, base_placement, floor_grid
 from armkit.reach.maps import voxel_keys
 from armkit.reach.orientations import radial_frames

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import armkit
 from armkit.errors import InputError
@@ -136,7 +138,7 @@ def test_grids_hold_the_poses_they_say():
 @pytest.mark.parametrize("call, message", [
     (lambda: floor_grid((1, 0), (0, 1), 0.1), "x: expected a range low .. high, found 1 .. 0"),
     (lambda: floor_grid((0, 1), (0, 1), 0), "step: expected a positive length"),
-    (lambda: floor_grid((0, 1), (0, 1), 1e-6), "expected at most 10,000,000"),
+    (lambda: floor_grid((0, 1), (0, 1), 1e-6), "expected at most 1,000,000"),
     (lambda: floor_grid((0, 1), (0, 1), 0.1, yaw_step=0), "yaw_step: expected above 0"),
     (lambda: rail_grid([0, 0], [1, 0, 0], 0.1), "start, end: expected 3 coordinates each"),
     (lambda: base_placement(UR5, np.eye(3), floor_grid((0, 0), (0, 0), 1)), "task: expected"),
@@ -155,3 +157,29 @@ def test_a_map_of_another_robot_is_refused(ur5_map):
     with pytest.raises(InputError, match="reach_map: expected a map of puma560"):
         base_placement(armkit.robot("puma560"), np.eye(4), floor_grid((0, 0), (0, 0), 1),
                        reach_map=ur5_map)
+
+
+ANY = st.floats(allow_nan=True, allow_infinity=True) | st.sampled_from(
+    [0.0, -0.0, 1e-320, 5e-324, 1e308, -1e308, 0.05, 1.0])
+
+
+@settings(max_examples=60)
+@given(x=st.tuples(ANY, ANY), y=st.tuples(ANY, ANY), step=ANY, yaw_step=ANY, z=ANY)
+def test_any_floor_numbers_give_a_grid_or_say_why(x, y, step, yaw_step, z):
+    try:
+        grid = floor_grid(x, y, step, z=z, yaw_step=yaw_step)
+    except InputError as err:
+        assert ": expected " in str(err)
+        return
+    assert 1 <= len(grid) <= 1_000_000 and np.isfinite(grid.poses).all()
+
+
+@settings(max_examples=60)
+@given(start=st.tuples(ANY, ANY, ANY), end=st.tuples(ANY, ANY, ANY), step=ANY, yaw=ANY)
+def test_any_rail_numbers_give_a_grid_or_say_why(start, end, step, yaw):
+    try:
+        grid = rail_grid(start, end, step, yaw=yaw)
+    except InputError as err:
+        assert ": expected " in str(err)
+        return
+    assert 1 <= len(grid) <= 1_000_000 and np.isfinite(grid.poses).all()

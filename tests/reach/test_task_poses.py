@@ -62,7 +62,7 @@ def test_a_task_file_reads_in_si(tmp_path):
      "floor or rail, found both"),
     (lambda d: d["base"]["floor"].update(step=0), "base.floor.step", "a positive length"),
     (lambda d: d["base"]["floor"].update(x=[5, -5]), "base.floor.x", "a range low .. high"),
-    (lambda d: d["base"]["floor"].update(step=1e-3), "base.floor.step", "at most 10,000,000"),
+    (lambda d: d["base"]["floor"].update(step=0.1), "base.floor.step", "at most 1,000,000"),
     (lambda d: d["base"]["floor"].update(yaw_step=-1), "base.floor.yaw_step", "above 0"),
     (lambda d: d.update(mask="pos"), "mask", "'pose', 'position'"),
     (lambda d: d.update(criterion="speed"), "criterion", "'reachability' or 'manipulability'"),

@@ -30,7 +30,7 @@ from pydantic import Field, model_validator
 
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import Number, StrictModel, UnitsField, kind_of, read_yaml, validated
-from armkit.kinematics.ik.task import NAMED_MASKS
+from armkit.kinematics.ik.masks import NAMED_MASKS
 from armkit.model.robot import Units
 from armkit.reach.placement import SCORES, BaseGrid, floor_grid, rail_grid
 from armkit.spatial import pose_from_xyz_rpy

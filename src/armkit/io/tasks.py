@@ -238,7 +238,7 @@ def _camera(spec: CameraField, robot, units: Units, folder: Path, where: str) ->
 
 
 def _mask(name: str | None, where: str) -> str | None:
-    from armkit.kinematics.ik.task import NAMED_MASKS
+    from armkit.kinematics.ik.masks import NAMED_MASKS
 
     if name is not None and name not in NAMED_MASKS:
         raise ModelFileError(where, "target.mask", f"one of {', '.join(NAMED_MASKS)}",

@@ -293,7 +293,7 @@ def manipulability_of(robot: Robot, Q: NDArray) -> NDArray:
     Q = np.ascontiguousarray(Q, dtype=float)
     out = np.empty(Q.shape[0])
     k = robot.chain.kernel
-    _manipulability.sized(Q.shape[0], Q, k.floats, k.ints, out)
+    _manipulability.sized(Q.shape[0], Q, k.F, k.I, out)
     return out
 
 
@@ -361,7 +361,7 @@ def _solve_chunk(plan: _Plan, tools: _Tools, index: int) -> MapChunk:
     if plan.method == "analytic":
         q_ref = np.broadcast_to(tools.q_ref, (len(T), robot.n)).copy()
         Q, _, flags = candidates(robot.chain, tools.solver.family, T, q_ref, mask, TOLERANCE,
-                                 TOLERANCE)
+                                 TOLERANCE, threads=1)
         ok = flags[..., 1] & flags[..., 2]             # reaches the target, inside the limits
     else:
         result = tools.solver.solve(T, mask=mask, method=plan.method, restarts=plan.restarts,
@@ -531,11 +531,13 @@ def reach_map(robot: Robot, resolution: float | None = None,
     h = default_resolution(bound) if resolution is None else finite_number("resolution", resolution)
     if not h > 0:
         raise InputError(f"resolution: expected a positive voxel edge (m), found {h:g}")
+    # The voxels of the ball the links span, at most MOST_VOXELS (compared as its radius in
+    # voxels, which a tiny h cannot overflow).
+    most_radius = (MOST_VOXELS * 3.0 / (4.0 * math.pi)) ** (1 / 3) - 1.0
+    if not bound / h <= most_radius:
+        raise InputError(f"resolution: expected at least {bound / most_radius:.3g} m for "
+                         f"{robot.name} (at most {MOST_VOXELS:,} voxels), found {h:g}")
     ball = 4.0 / 3.0 * math.pi * (bound / h + 1.0) ** 3
-    if ball > MOST_VOXELS:
-        finest = bound / ((MOST_VOXELS * 3.0 / (4.0 * math.pi)) ** (1 / 3) - 1.0)
-        raise InputError(f"resolution: expected at least {finest:.3g} m for {robot.name} (at "
-                         f"most {MOST_VOXELS:,} voxels), found {h:g}")
     if isinstance(orientations, Orientations):
         chosen = orientations
     else:

@@ -1,6 +1,6 @@
 """The tool orientations a reachability map tries at every voxel, and the IK task they ask for.
 
-An orientation set is K rotations and a task mask (`armkit.kinematics.ik.task`):
+An orientation set is K rotations and a task mask (`armkit.kinematics.ik.masks`):
 
 - `Orientations.sphere`: approach directions (the tool's z axis) evenly spread on the sphere,
   times rolls about each: full poses, for arms of six joints or more;
@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics.ik.analytic import family_of
-from armkit.kinematics.ik.task import MASK_FORMS, as_mask, mask_name
+from armkit.kinematics.ik.masks import MASK_FORMS, as_mask, mask_name
 from armkit.model.chain import frozen_array
 from armkit.model.robot import Robot
 
@@ -64,7 +64,7 @@ class Orientations:
 
     @property
     def task(self) -> str:
-        """The mask's name (`armkit.kinematics.ik.task.mask_name`)."""
+        """The mask's name (`armkit.kinematics.ik.masks.mask_name`)."""
         return mask_name(self.mask)
 
     def in_base(self, centers: NDArray, robot: Robot) -> NDArray:

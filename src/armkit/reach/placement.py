@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.errors import InputError
 from armkit.kinematics.ik import IKSolver
 from armkit.kinematics.ik.analytic import candidates
-from armkit.kinematics.ik.task import as_mask, mask_name
+from armkit.kinematics.ik.masks import as_mask, mask_name
 from armkit.model.chain import frozen_array
 from armkit.model.robot import Robot
 from armkit.reach.maps import TOLERANCE, ReachMap, manipulability_of, robot_key
@@ -32,7 +32,7 @@ from armkit.spatial import as_transform, invert, rotz
 
 SCORES = ("reachability", "manipulability")
 BLOCK = 1 << 16             # IK problems per block: memory stays bounded for any grid
-MOST_BASES = 10_000_000
+MOST_BASES = 1_000_000         # 128 MB of base poses
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,11 +77,11 @@ def _axis_values(name: str, low: float, high: float, step: float) -> NDArray:
     low, high = finite_number(f"{name}[0]", low), finite_number(f"{name}[1]", high)
     if high < low:
         raise InputError(f"{name}: expected a range low .. high, found {low:g} .. {high:g}")
-    count = math.floor((high - low) / step + 1e-9) + 1
-    if count > MOST_BASES:
+    steps = (high - low) / step
+    if not steps < MOST_BASES:
         raise InputError(f"{name}: expected at most {MOST_BASES:,} steps of {step:g}, found "
-                         f"{count:,}")
-    return low + step * np.arange(count)
+                         f"{steps:.3g}")
+    return low + step * np.arange(math.floor(steps + 1e-9) + 1)
 
 
 def _yaw_values(yaw: tuple[float, float] | None, yaw_step: float) -> NDArray:
@@ -90,6 +90,9 @@ def _yaw_values(yaw: tuple[float, float] | None, yaw_step: float) -> NDArray:
     if not 0 < yaw_step <= 2 * math.pi:
         raise InputError(f"yaw_step: expected above 0 and at most 2 pi rad, found {yaw_step:g}")
     if yaw is None:
+        if not 2 * math.pi / yaw_step < MOST_BASES:
+            raise InputError(f"yaw_step: expected at most {MOST_BASES:,} yaws in a turn, found "
+                             f"a step of {yaw_step:g} rad")
         count = max(1, round(2 * math.pi / yaw_step))
         return -math.pi + 2 * math.pi * np.arange(count) / count
     return _axis_values("yaw", yaw[0], yaw[1], yaw_step)
@@ -146,7 +149,10 @@ def rail_grid(start: ArrayLike, end: ArrayLike, step: float, *,
     b = np.array([finite_number("end", v) for v in np.ravel(end)])
     if a.shape != (3,) or b.shape != (3,):
         raise InputError(f"start, end: expected 3 coordinates each, found {a.size} and {b.size}")
-    length = float(np.linalg.norm(b - a))
+    length = math.dist(a, b)
+    if not math.isfinite(length):
+        raise InputError(f"start, end: expected a rail of finite length, found one from "
+                         f"{a.tolist()} to {b.tolist()}")
     direction = (b - a) / length if length > 0 else np.array([1.0, 0.0, 0.0])
     s = _axis_values("rail", 0.0, length, step)
     yaws = (np.array([finite_number("yaw", yaw)]) if np.ndim(yaw) == 0
