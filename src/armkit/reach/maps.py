@@ -328,7 +328,6 @@ class _Tools:
 
     solver: IKSolver
     checker: Any
-    q_ref: NDArray          # (n,) the middle of the limits: angles fold nearest it
 
 
 def _tools(plan: _Plan) -> _Tools:
@@ -337,8 +336,7 @@ def _tools(plan: _Plan) -> _Tools:
         from armkit.planning import CollisionChecker
 
         checker = CollisionChecker(plan.robot, plan.scene, resolution=plan.collision_resolution)
-    low, high = plan.robot.sampling_limits
-    return _Tools(IKSolver(plan.robot, threads=1), checker, 0.5 * (low + high))
+    return _Tools(IKSolver(plan.robot, threads=1), checker)
 
 
 def voxel_targets(robot: Robot, centers: NDArray, orientations: Orientations) -> NDArray:
@@ -352,29 +350,65 @@ def voxel_targets(robot: Robot, centers: NDArray, orientations: Orientations) ->
     return T.reshape(-1, 4, 4)
 
 
+def reaching_solutions(solver: IKSolver, T: NDArray, mask: NDArray, method: str, *,
+                       restarts: int = RESTARTS, seed: int = 0,
+                       threads: int | None = None) -> tuple[NDArray, NDArray]:
+    """IK for targets T (N, 4, 4): the solutions and which of them reach their target.
+
+    Parameters
+    ----------
+    solver : IKSolver
+    mask : ndarray of bool, (6,)
+        The task.
+    method : {"analytic", "lm", "newton"}
+        "analytic": every closed-form branch (`serves` must hold); else one numeric solution
+        per target, with `restarts` random restarts seeded by `seed`.
+    threads : int, optional
+        Most threads the batch may use.
+
+    Returns
+    -------
+    Q : ndarray, (N, B, n)
+        B = the closed form's branches, or 1; angles folded into the limits nearest their
+        middle.
+    ok : ndarray of bool, (N, B)
+        Within `TOLERANCE` of the target under the mask (by forward kinematics) and inside
+        the joint limits.
+    """
+    robot = solver.robot
+    if method == "analytic":
+        low, high = robot.sampling_limits
+        q_ref = np.broadcast_to(0.5 * (low + high), (len(T), robot.n)).copy()
+        Q, _, flags = candidates(robot.chain, solver.family, T, q_ref, mask, TOLERANCE,
+                                 TOLERANCE, threads=threads)
+        return Q, flags[..., 1] & flags[..., 2]
+    result = solver.solve(T, mask=mask, method=method, restarts=restarts, seed=seed,
+                          tol_position=TOLERANCE, tol_rotation=TOLERANCE)
+    return result.q[:, None], np.asarray(result.success).reshape(-1, 1).copy()
+
+
+def serves(solver: IKSolver, mask: NDArray) -> bool:
+    """Whether the robot's closed form solves the task `mask`: its own task, or one that asks
+    more (a looser task is the numeric solver's, as in `IKSolver.solve`)."""
+    family = solver.family
+    return family is not None and all(m or not f for m, f in zip(mask.tolist(), family.mask))
+
+
 def _solve_chunk(plan: _Plan, tools: _Tools, index: int) -> MapChunk:
     """IK for every (voxel, orientation) of chunk `index`, reduced per voxel."""
     first = index * plan.chunk
     centers = (plan.voxels[first:first + plan.size(index)] + 0.5) * plan.resolution
     T = voxel_targets(plan.robot, centers, plan.orientations)
-    robot, mask = plan.robot, plan.orientations.mask
-    if plan.method == "analytic":
-        q_ref = np.broadcast_to(tools.q_ref, (len(T), robot.n)).copy()
-        Q, _, flags = candidates(robot.chain, tools.solver.family, T, q_ref, mask, TOLERANCE,
-                                 TOLERANCE, threads=1)
-        ok = flags[..., 1] & flags[..., 2]             # reaches the target, inside the limits
-    else:
-        result = tools.solver.solve(T, mask=mask, method=plan.method, restarts=plan.restarts,
-                                    seed=_chunk_seed(plan.seed, index), tol_position=TOLERANCE,
-                                    tol_rotation=TOLERANCE)
-        Q, ok = result.q[:, None], np.asarray(result.success).reshape(-1, 1).copy()
+    Q, ok = reaching_solutions(tools.solver, T, plan.orientations.mask, plan.method,
+                               restarts=plan.restarts, seed=_chunk_seed(plan.seed, index),
+                               threads=1)
     if tools.checker is not None and ok.any():
         ok[ok] = tools.checker.valid(np.ascontiguousarray(Q[ok]))
     v, K = plan.size(index), len(plan.orientations)
     reached = ok.any(axis=1).reshape(v, K)
     best = np.zeros(ok.shape)
     if ok.any():
-        best[ok] = manipulability_of(robot, Q[ok])
+        best[ok] = manipulability_of(plan.robot, Q[ok])
     return MapChunk(reached.sum(axis=1), np.packbits(reached, axis=1, bitorder="little"),
                     best.reshape(v, -1).max(axis=1))
 
@@ -616,15 +650,13 @@ def _method(solver: IKSolver, orientations: Orientations, method: str) -> str:
     or one that asks more), else the numeric method."""
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, found {method!r}")
-    family = solver.family
-    serves = family is not None and all(m or not f for m, f in
-                                        zip(orientations.mask.tolist(), family.mask))
-    if method == "analytic" and not serves:
+    closed = serves(solver, orientations.mask)
+    if method == "analytic" and not closed:
         raise InputError(f"method: expected 'auto', 'lm' or 'newton' for {solver.robot.name} "
                          f"with the task {orientations.task} (no closed form serves it), "
                          f"found 'analytic'")
     if method == "auto":
-        return "analytic" if serves else "lm"
+        return "analytic" if closed else "lm"
     return method
 
 

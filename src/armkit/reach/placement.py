@@ -22,11 +22,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.kinematics.ik import IKSolver
-from armkit.kinematics.ik.analytic import candidates
 from armkit.kinematics.ik.masks import as_mask, mask_name
 from armkit.model.chain import frozen_array
 from armkit.model.robot import Robot
-from armkit.reach.maps import TOLERANCE, ReachMap, manipulability_of, robot_key
+from armkit.reach.maps import (ReachMap, manipulability_of, reaching_solutions, robot_key,
+                               serves)
 from armkit.sampled_workspace import finite_number, whole_number
 from armkit.spatial import as_transform, invert, rotz
 
@@ -295,7 +295,7 @@ def base_placement(robot: Robot, task: ArrayLike, grid: BaseGrid, *,
     if criterion == "reachability" and reach_map is None:
         raise InputError("criterion: expected 'manipulability' without a map, found "
                          "'reachability' (give a reach map)")
-    solver = IKSolver(robot, threads=1)
+    solver = IKSolver(robot)
     if mask is not None:
         task_mask = as_mask(mask)
     elif reach_map is not None:
@@ -315,24 +315,12 @@ def base_placement(robot: Robot, task: ArrayLike, grid: BaseGrid, *,
         tried = (reachability > 0).all(axis=1)
     reached = np.zeros((B, P), dtype=bool)
     quality = np.full((B, P), np.nan)
-    family = solver.family
-    closed = family is not None and all(m or not f for m, f in zip(task_mask.tolist(),
-                                                                    family.mask))
-    low, high = robot.sampling_limits
-    middle = 0.5 * (low + high)
+    method = "analytic" if serves(solver, task_mask) else "lm"
     bases = np.flatnonzero(tried)
     for rows in _blocks(len(bases), P):
         b = bases[rows]
         T = (T_base_world[b, None] @ T_task[None]).reshape(-1, 4, 4)
-        if closed:
-            q_ref = np.broadcast_to(middle, (len(T), robot.n)).copy()
-            Q, _, flags = candidates(robot.chain, family, T, q_ref, task_mask, TOLERANCE,
-                                     TOLERANCE)
-            ok = flags[..., 1] & flags[..., 2]
-        else:
-            result = solver.solve(T, mask=task_mask, method="lm", restarts=restarts,
-                                  tol_position=TOLERANCE, tol_rotation=TOLERANCE)
-            Q, ok = result.q[:, None], np.asarray(result.success).reshape(-1, 1).copy()
+        Q, ok = reaching_solutions(solver, T, task_mask, method, restarts=restarts)
         reached[b] = ok.any(axis=1).reshape(len(b), P)
         if criterion == "manipulability":
             best = np.full(ok.shape, -np.inf)
