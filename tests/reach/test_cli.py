@@ -69,6 +69,19 @@ def test_reach_prints_a_summary(tmp_path):
     assert f"map: {tmp_path / 'ur5_reach.npz'}" in text
 
 
+def test_a_long_run_says_how_far_it_is_on_stderr(tmp_path, monkeypatch):
+    import armkit.cli.reach as command
+
+    monkeypatch.setattr(command, "QUIET_FOR", 0.0)
+    result = run("reach", "water_supply", "--resolution", "100", "--orientations", "64",
+                 "--out", tmp_path, "--json")
+    assert result.exit_code == 0, result.output
+    lines = result.stderr.splitlines()
+    assert lines and all(line.startswith("solved ") and " voxels (" in line for line in lines)
+    done = [int(line.split()[1].replace(",", "")) for line in lines]
+    assert done == sorted(done) and 0 < done[0] < json.loads(result.stdout)["voxels"]
+
+
 def test_reach_with_a_scene_counts_collision_free_solutions(tmp_path):
     shelf = armkit.io.scene.read_scene(ROOT / "examples" / "shelf.scene.yaml")
     result = run("reach", "inspection_6dof", "--resolution", "300", "--orientations", "8",

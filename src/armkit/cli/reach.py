@@ -39,9 +39,10 @@ class _Lines:
 
     def __call__(self, done: int, total: int) -> None:
         if self.first is None:                  # chunks finished before: not this run's
-            self.first = done
+            self.first, self.started = done, time.perf_counter()
         elapsed = time.perf_counter() - self.started
-        if elapsed < QUIET_FOR or done < self.next_report or done >= total:
+        if elapsed < QUIET_FOR or done <= self.first or done < self.next_report \
+                or done >= total:
             return
         left = elapsed * (total - done) / max(done - self.first, 1)
         stderr.print(f"solved {done:,} of {total:,} voxels ({100 * done / total:.0f} %), "

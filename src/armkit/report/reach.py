@@ -168,7 +168,7 @@ def placement_figure(placement: Placement, units: Units | None = None) -> Figure
             ax.grid(alpha=0.3)
             ax.legend(handles=ax.get_legend_handles_labels()[0]
                       + [Patch(color=_OUTSIDE, label="no yaw reaches every pose")],
-                      loc="upper right", fontsize=8)
+                      loc="best", fontsize=8)
         fig.axes[0].set_title("best over the yaws")
         fig.axes[2].set_title("yaws that work")
     else:
