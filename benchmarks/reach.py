@@ -4,7 +4,9 @@ LocalCluster, and a placement with its map, each beside references measured in t
     python benchmarks/reach.py            # UR5, 5 cm x 200 orientations: local, then Dask
     python benchmarks/reach.py --quick    # 10 cm x 200 (a quick look)
     python benchmarks/reach.py --big      # also 2.5 cm x 200 on Dask (tens of millions of IK
-                                          # problems: many minutes)
+                                          # problems: many minutes; with --quick, the local
+                                          # map it is compared with is the 10 cm one)
+    python benchmarks/reach.py --numeric  # also a Panda map (numeric IK), 10 cm x 50
 
 Map figures: wall time and CPU time of `armkit.reach_map` (two threads, `set_num_threads(2)`),
 its IK problems (voxels x orientations) and the time per problem. References, on problems of
@@ -21,7 +23,7 @@ Every ratio is reference time / armkit time per IK problem. Local and Dask runs 
 processes with one thread each, on loopback, started before the clock) then take turns on a
 10 cm map, each pair checked bit for bit, with the wall and CPU time per problem of each (the
 workers' own CPU for Dask): on a shared machine the CPU time per problem is the steadier
-figure. With --big, a 2.5 cm map on Dask, its CPU per problem beside the local 5 cm map's.
+figure. With --big, a 2.5 cm map on Dask, its CPU per problem beside the local map's.
 Placement: 10 grasp poses on a 1 m x 1 m floor at 5 cm and 10 deg of yaw (15,876 bases) with the
 UR5 map, against the same placement without the map (closed-form IK at every base) and a
 Python loop of `IKSolver.solutions` over the bases. The load average is printed before and
@@ -181,7 +183,7 @@ def main() -> None:
             n_big = len(big.voxels) * len(orientations)
             print(f"map 2.5 cm, Dask: {wall_big:.1f} s for {n_big:,} IK problems: "
                   f"{wall_big / n_big * 1e6:.2f} us/problem wall, {cpu_big / n_big * 1e6:.2f} "
-                  f"CPU (workers); the local 5 cm map's CPU per problem / this: "
+                  f"CPU (workers); the local {h * 100:g} cm map's CPU per problem / this: "
                   f"{(cpu / problems) / (cpu_big / n_big):.2f}")
     print(load())
 
