@@ -45,6 +45,8 @@ _HOMES = {
     **dict.fromkeys(("inverse_dynamics", "gravity_torques", "mass_matrix", "coriolis",
                      "coriolis_matrix", "forward_dynamics", "with_payload", "torque_profile",
                      "TorqueLimits"), "armkit.dynamics"),
+    **dict.fromkeys(("reach_map", "ReachMap", "Orientations", "base_placement", "Placement"),
+                    "armkit.reach"),
 }
 
 if TYPE_CHECKING:       # what the names are, for readers and type checkers
@@ -59,6 +61,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.io.camera import read_camera_mount
     from armkit.perception import TargetResult, detect_target
     from armkit.planning import PlanResult, Scene, plan
+    from armkit.reach import Orientations, Placement, ReachMap, base_placement, reach_map
     from armkit.kinematics.forward import fk, fk_frames
     from armkit.kinematics.ik import IKResult, IKSolutions, IKSolver, IKTrack, ik, ik_solutions
     from armkit.kinematics.jacobian import (condition_number, jacobian, jacobian_analytic,

@@ -147,7 +147,7 @@ class Workspace:
         Section
             Cells over the workspace's x-y extent; empty if the plane misses the workspace.
         """
-        height = _finite("height", height)
+        height = finite_number("height", height)
         h = self.resolution
         ij = self.voxels[self.voxels[:, 2] == math.floor(height / h), :2]
         (i0, j0), (i1, j1) = self.voxels[:, :2].min(axis=0), self.voxels[:, :2].max(axis=0) + 1
@@ -169,7 +169,7 @@ class Workspace:
         Section
             Axes (r, z): r from -radial_reach to radial_reach, z over the workspace's height.
         """
-        azimuth = _finite("azimuth", azimuth)
+        azimuth = finite_number("azimuth", azimuth)
         h = self.resolution
         r_cells = math.ceil(self.radial_reach / h) + 1
         k0, k1 = self.voxels[:, 2].min(), self.voxels[:, 2].max() + 1
@@ -191,7 +191,8 @@ def _section(plane: str, position: float, occupied: NDArray, extent: NDArray,
     return Section(plane, position, occupied, extent, h, float(occupied.sum()) * h * h)
 
 
-def _finite(name: str, value: Any) -> float:
+def finite_number(name: str, value: Any) -> float:
+    """`value` as a finite float; else an InputError naming `name`."""
     try:
         x = float(value)
     except (TypeError, ValueError):
@@ -201,7 +202,7 @@ def _finite(name: str, value: Any) -> float:
     return x
 
 
-def _whole(name: str, value: Any, low: int, high: int | None = None) -> int:
+def whole_number(name: str, value: Any, low: int, high: int | None = None) -> int:
     """`value` as an int in [low, high]; integral floats such as 1e6 pass."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
                                                                     np.floating)):
@@ -383,8 +384,10 @@ def _scheduler_address(address: str) -> str:
     return address.strip()
 
 
-def _client(scheduler: Any):
-    """(client, whether we opened it) for a `distributed.Client` or a scheduler address."""
+def dask_client(scheduler: Any):
+    """(client, whether we opened it) for a `distributed.Client` or a scheduler address,
+    checked before any connection (`_scheduler_address`); a missing dask or an unreachable
+    scheduler is an InputError naming ``scheduler``."""
     try:
         from distributed import Client
     except ImportError:
@@ -503,17 +506,17 @@ def workspace(robot: Robot, n: int, *, seed: int | None = 0, resolution: float |
     if not isinstance(robot, Robot):
         raise InputError(f"robot: expected a Robot (see armkit.robot), "
                          f"found {type(robot).__name__}")
-    n = _whole("n", n, 1)
+    n = whole_number("n", n, 1)
     seed = (int(np.random.SeedSequence().entropy) if seed is None
-            else _whole("seed", seed, 0))
-    chunk = _whole("chunk", chunk, 1, MAX_CHUNK)
-    cloud = _whole("cloud", cloud, 0)
+            else whole_number("seed", seed, 0))
+    chunk = whole_number("chunk", chunk, 1, MAX_CHUNK)
+    cloud = whole_number("cloud", cloud, 0)
     _require_bounded(robot)
     lower, upper = robot.sampling_limits
     bound = reach_bound(robot, lower, upper)
     if resolution is None:
         resolution = default_resolution(bound)
-    resolution = _finite("resolution", resolution)
+    resolution = finite_number("resolution", resolution)
     if not resolution > 0:
         raise InputError(f"resolution: expected a positive voxel edge (m), found {resolution}")
     if bound / resolution > MAX_VOXELS:
@@ -524,7 +527,7 @@ def workspace(robot: Robot, n: int, *, seed: int | None = 0, resolution: float |
     if scheduler is None:
         part = _chunks(plan, 0, plan.chunks, progress)
     else:
-        client, opened = _client(scheduler)
+        client, opened = dask_client(scheduler)
         try:
             part = _run_dask(plan, client, progress)
         finally:

@@ -293,6 +293,21 @@ ROWS: list[tuple[tuple[str, ...], str]] = [
     (("demo", "--bogus"), "--bogus: expected an option of `armkit demo`"),
     (("demo", "extra"), "armkit demo: expected no more arguments, found 'extra'"),
     (("demo", "--out", "/dev/null/x"), "--out: expected a folder armkit can write"),
+    # reach, place: every row fails before a map is solved
+    (("reach",), "ROBOT: expected a value, found none"),
+    (("reach", "ur5", "--resolution", "-5"), "--resolution: expected a number above 0"),
+    (("reach", "ur5", "--resolution", "1e-6"), "resolution: expected at least"),
+    (("reach", "ur5", "--orientations", "1.5"), "--orientations: expected a whole number"),
+    (("reach", "ur5", "--method", "x"), "--method: expected one of auto, analytic, lm, newton"),
+    (("reach", "ur5", "--scene", "{tmp}/broken.yaml"), "{tmp}/broken.yaml: line "),
+    (("reach", "ur5", "--out", "/dev/null/x"), "--out: expected a folder armkit can write"),
+    (("reach", "ur5", "--bogus"), "--bogus: expected an option of `armkit reach`"),
+    (("place", "ur5"), "TASKS: expected a value, found none"),
+    (("place", "ur5", "{tmp}/empty.yaml"), "{tmp}/empty.yaml: expected a mapping of fields"),
+    (("place", "ur5", "{tmp}/broken.yaml"), "{tmp}/broken.yaml: line "),
+    (("place", "ur5", "{tmp}/wp.csv", "--map", "{tmp}/wp.csv"), "{tmp}/wp.csv: expected"),
+    (("place", "ur5", "{tmp}/empty.yaml", "--bogus"), "--bogus: expected an option of "
+                                                      "`armkit place`"),
 ]
 
 

@@ -87,6 +87,21 @@ def default_height(ws: Workspace) -> float:
     return float((layer + 0.5) * ws.resolution)
 
 
+def label_section(ax, section, units: Units) -> str:
+    """Label the axes of a section's panel (x, y; or r, z) in `units`, and return where the
+    section lies, in words: its height, or the azimuth of its vertical plane. `section`: a
+    `Section` or anything with its ``plane`` and ``position``."""
+    unit = units.length
+    if section.plane == "horizontal":
+        ax.set_xlabel(f"x ({unit})")
+        ax.set_ylabel(f"y ({unit})")
+        return f"z = {units.length_from_si(section.position):.6g} {unit}"
+    ax.set_xlabel(f"r ({unit}), signed distance from the z axis")
+    ax.set_ylabel(f"z ({unit})")
+    return (f"vertical plane through the z axis, azimuth "
+            f"{units.angle_from_si(section.position):.6g} {units.angle}")
+
+
 def section_figure(ws: Workspace, height: float | None = None, azimuth: float = 0.0,
                    units: Units | None = None) -> Figure:
     """A horizontal section at `height` and a vertical one through the base z axis.
@@ -119,15 +134,7 @@ def section_figure(ws: Workspace, height: float | None = None, azimuth: float = 
         ax.imshow(section.occupied, origin="lower", cmap="Blues", vmin=0, vmax=1.4,
                   extent=units.length_from_si(section.extent), interpolation="nearest")
         area = float(units.length_from_si(units.length_from_si(section.area)))
-        if section.plane == "horizontal":
-            where = f"z = {units.length_from_si(section.position):.6g} {unit}"
-            ax.set_xlabel(f"x ({unit})")
-            ax.set_ylabel(f"y ({unit})")
-        else:
-            where = (f"vertical plane through the z axis, azimuth "
-                     f"{units.angle_from_si(section.position):.6g} {units.angle}")
-            ax.set_xlabel(f"r ({unit}), signed distance from the z axis")
-            ax.set_ylabel(f"z ({unit})")
+        where = label_section(ax, section, units)
         ax.scatter([0], [0], label="base origin", **_BASE)
         ax.add_patch(Rectangle((0, 0), 0, 0, color=plt_blue, label=f"occupied {voxel:.6g} "
                                f"{unit} cell"))
