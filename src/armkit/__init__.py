@@ -30,7 +30,8 @@ _HOMES = {
     **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.io.robot_files"),
     "Robot": "armkit.model.robot",
     **dict.fromkeys(("Trajectory", "cubic", "quintic", "jerk_limited", "trapezoidal", "retime",
-                     "spline", "tool_motion", "RetimeResult"), "armkit.trajectory"),
+                     "retime_jerk", "spline", "tool_motion", "RetimeResult"),
+                    "armkit.trajectory"),
     **dict.fromkeys(("Section", "Workspace", "workspace"), "armkit.sampled_workspace"),
     **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
     **dict.fromkeys(("load_register_map", "check_waypoints", "send_waypoints", "DriveClient",
@@ -62,7 +63,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.sampled_workspace import Section, Workspace, workspace
     from armkit.threads import get_num_threads, set_num_threads
     from armkit.trajectory import (RetimeResult, Trajectory, cubic, jerk_limited, quintic,
-                                   retime, spline, tool_motion, trapezoidal)
+                                   retime, retime_jerk, spline, tool_motion, trapezoidal)
 
 
 __getattr__, __dir__ = lazy_names(__name__, _HOMES)

@@ -33,7 +33,7 @@ from pydantic import Field, field_validator, model_validator
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import (Number, StrictModel, UnitsField, found_text, kind_of,
                                  read_yaml, validated)
-from armkit.model.chain import Limits
+from armkit.model.chain import JERK_PER_ACCELERATION, Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
 from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
@@ -71,6 +71,7 @@ class _JointField(StrictModel):
     limits: list[Number] | None = None
     velocity: Annotated[Number, Field(gt=0)] | None = None
     acceleration: Annotated[Number, Field(gt=0)] | None = None
+    jerk: Annotated[Number, Field(gt=0)] | None = None
 
     @field_validator("limits")
     @classmethod
@@ -91,7 +92,8 @@ class DHJointField(_JointField):
     def _limits_match_type(self):
         if self.type == "prismatic" and self.limits is None:
             raise ValueError("expected limits [lower, upper] for a prismatic joint, found none")
-        if self.type == "fixed" and (self.limits or self.velocity or self.acceleration):
+        if self.type == "fixed" and (self.limits or self.velocity or self.acceleration
+                                     or self.jerk):
             raise ValueError("expected no limits on a fixed row, found some")
         return self
 
@@ -270,7 +272,7 @@ def _check_magnitudes(spec: _RobotField, units: Units, path: str) -> None:
         revolute = joint.type == "revolute"
         to_si = units.angle_to_si if revolute else units.length_to_si
         unit, si_unit = (units.angle, "rad") if revolute else (units.length, "m")
-        for key, per in (("velocity", "/s"), ("acceleration", "/s^2")):
+        for key, per in (("velocity", "/s"), ("acceleration", "/s^2"), ("jerk", "/s^3")):
             value = getattr(joint, key)
             if value is not None:
                 check(f"{where}.{key}", value, f"a {key} limit", to_si, MAX_RATE,
@@ -313,7 +315,8 @@ def _limits(joint: _JointField, kind: str, units: Units) -> Limits | None:
         lower, upper = float(to_si(lower)), float(to_si(upper))
     velocity, acceleration = (np.inf if v is None else float(to_si(v))
                               for v in (joint.velocity, joint.acceleration))
-    return Limits(lower, upper, velocity, acceleration)
+    jerk = None if joint.jerk is None else float(to_si(joint.jerk))
+    return Limits(lower, upper, velocity, acceleration, jerk)
 
 
 def _dh_row(joint: DHJointField, units: Units) -> DHRow:
@@ -384,6 +387,8 @@ def _limits_doc(limits: Limits | None, kind: str, units: Units) -> dict:
         value = getattr(limits, key)
         if np.isfinite(value):
             doc[key] = _num(from_si(value))
+    if np.isfinite(limits.jerk) and limits.jerk != JERK_PER_ACCELERATION * limits.acceleration:
+        doc["jerk"] = _num(from_si(limits.jerk))
     return doc
 
 

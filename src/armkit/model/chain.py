@@ -45,24 +45,35 @@ def freeze(record, *names: str) -> None:
             object.__setattr__(record, name, frozen_array(value))
 
 
+JERK_PER_ACCELERATION = 10.0
+"""1/s: a joint without a jerk limit of its own gets this many times its acceleration limit,
+so that it reaches full acceleration from rest in 0.1 s."""
+
+
 @dataclass(frozen=True)
 class Limits:
-    """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2).
+    """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2),
+    jerk (/s^3).
 
-    Velocity and acceleration are ``inf`` where none is given.
+    Velocity and acceleration are ``inf`` where none is given; jerk, where none is given, is
+    `JERK_PER_ACCELERATION` times the acceleration limit.
     """
 
     lower: float
     upper: float
     velocity: float = np.inf
     acceleration: float = np.inf
+    jerk: float | None = None
 
     def __post_init__(self):
         if not self.lower < self.upper:
             raise InputError(f"limits: expected lower < upper, found {self.lower} and {self.upper}")
-        if not (self.velocity > 0 and self.acceleration > 0):
-            raise InputError(f"limits: expected positive velocity and acceleration limits, "
-                             f"found {self.velocity} and {self.acceleration}")
+        if self.jerk is None:
+            object.__setattr__(self, "jerk", JERK_PER_ACCELERATION * self.acceleration)
+        if not (self.velocity > 0 and self.acceleration > 0 and self.jerk > 0):
+            raise InputError(f"limits: expected positive velocity, acceleration and jerk "
+                             f"limits, found {self.velocity}, {self.acceleration} and "
+                             f"{self.jerk}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -168,8 +179,9 @@ class Chain:
         off the chain where its first mimic joint is.
     lower, upper : ndarray, shape (n,)
         Position limits (rad or m); a leader's are narrowed to keep its followers in theirs.
-    velocity_limits, acceleration_limits : ndarray, shape (n,)
-        Per joint (/s, /s^2); inf where none is given; narrowed for leaders as the positions.
+    velocity_limits, acceleration_limits, jerk_limits : ndarray, shape (n,)
+        Per joint (/s, /s^2, /s^3); inf where none is given (jerk: see `Limits`); narrowed
+        for leaders as the positions.
     revolute : ndarray of bool, shape (n,)
     coupling : ndarray, shape (n_joints, n)
         d(q of each moving joint)/dq: the identity without mimic joints.
@@ -194,6 +206,7 @@ class Chain:
     upper: NDArray = field(init=False, repr=False)
     velocity_limits: NDArray = field(init=False, repr=False)
     acceleration_limits: NDArray = field(init=False, repr=False)
+    jerk_limits: NDArray = field(init=False, repr=False)
     revolute: NDArray = field(init=False, repr=False)
     coupling: NDArray = field(init=False, repr=False)
     screws: NDArray = field(init=False, repr=False)
@@ -229,6 +242,7 @@ class Chain:
         set_("upper", frozen_array([x.upper for x in limits]))
         set_("velocity_limits", frozen_array([x.velocity for x in limits]))
         set_("acceleration_limits", frozen_array([x.acceleration for x in limits]))
+        set_("jerk_limits", frozen_array([x.jerk for x in limits]))
         revolute = np.array([j.kind == "revolute" for j in variables])
         revolute.setflags(write=False)
         set_("revolute", revolute)
@@ -386,7 +400,7 @@ def leader_limits(limits: Limits, couplings) -> Limits | None:
     Limits, or None if no leader value keeps every mimic joint within its limits.
     """
     lower, upper = limits.lower, limits.upper
-    velocity, acceleration = limits.velocity, limits.acceleration
+    velocity, acceleration, jerk = limits.velocity, limits.acceleration, limits.jerk
     for m, b, own in couplings:
         if m == 0.0:
             if not own.lower <= b <= own.upper:
@@ -396,7 +410,8 @@ def leader_limits(limits: Limits, couplings) -> Limits | None:
         lower, upper = max(lower, ends[0]), min(upper, ends[1])
         velocity = min(velocity, own.velocity / abs(m))
         acceleration = min(acceleration, own.acceleration / abs(m))
-    return Limits(lower, upper, velocity, acceleration) if lower < upper else None
+        jerk = min(jerk, own.jerk / abs(m))
+    return Limits(lower, upper, velocity, acceleration, jerk) if lower < upper else None
 
 
 @dataclass(frozen=True, eq=False)

@@ -120,6 +120,12 @@ class Robot:
         return self.chain.acceleration_limits
 
     @property
+    def jerk_limits(self) -> NDArray:
+        """Jerk limits (n,), rad/s^3 or m/s^3: the robot file's, else 10 times the
+        acceleration limits (`armkit.model.chain.JERK_PER_ACCELERATION`)."""
+        return self.chain.jerk_limits
+
+    @property
     def sampling_limits(self) -> tuple[NDArray, NDArray]:
         """Ranges to draw joint values from, (n,) each: the position limits, and one turn for
         a revolute joint without them (see `Chain.sampling_limits`)."""
