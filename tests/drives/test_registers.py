@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from pymodbus.client import ModbusTcpClient
 
 import armkit
-from armkit.drives import JointRegister, load_register_map
+from armkit.drives import JointRegister
+from armkit.io.register_maps import load_register_map
 from armkit.drives.registers import MAX_WRITE, runs
 from armkit.errors import ModelFileError
 from tests.drives.conftest import INSPECTION, ROOT, WATER, waypoints

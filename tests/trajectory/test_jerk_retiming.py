@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 import armkit
 from armkit.errors import InputError
 from armkit.trajectory import Trajectory, retime, retime_jerk, waypoint_path
-from armkit.trajectory.jerk_retiming import peaks
+from armkit.trajectory.bounds import peaks
 
 RATE = 10_000                # Hz: the samples the limits are checked on
 RTOL = 1e-7                  # on the 10 kHz samples: the retimer bounds every instant

@@ -470,8 +470,20 @@ def robots() -> list[str]:
                   if p.name.endswith(".yaml"))
 
 
-def robot(name_or_path: str | Path | Robot) -> Robot:
+def robot(name_or_path: str | Path | Robot, folder: str | Path | None = None) -> Robot:
     """A robot from a built-in name, a YAML robot file or a URDF file.
+
+    The one rule for every name of a robot, given or inside a file (task, scene, register map,
+    hand-eye files): a built-in name (`robots`) is the built-in robot; anything else is a
+    file, relative to `folder` (the folder of the file that names it) unless absolute. A file
+    that happens to bear a built-in name is named with its folder (``./ur5``).
+
+    Parameters
+    ----------
+    name_or_path : str, Path or Robot
+        A Robot is returned as it is.
+    folder : str or Path, optional
+        Where a relative file name is taken from (default: the working directory).
 
     Example
     -------
@@ -491,14 +503,36 @@ def robot(name_or_path: str | Path | Robot) -> Robot:
     if text in robots():
         with resources.as_file(_builtin_dir() / f"{text}.yaml") as path:
             return load_robot(path)
+    path = Path(text) if folder is None else Path(folder) / text
     try:
-        is_file = Path(text).is_file()
+        is_file = path.is_file()
     except (OSError, ValueError) as err:       # too long for a file name, a NUL byte, ...
         raise InputError(f"robot: expected a built-in name or a robot file, found "
                          f"{found_text(text)} ({getattr(err, 'strerror', None) or err})") from None
     if is_file:
-        return load_robot(text)
-    hint = difflib.get_close_matches(text, robots(), n=1)
+        return load_robot(path)
     raise InputError(f"robot: expected a built-in name ({', '.join(robots())}) or a robot file, "
-                     f"found {found_text(text)}" + (f" (did you mean {hint[0]!r}?)" if hint
-                                                    else ""))
+                     f"found {found_text(text)}{_did_you_mean(text)}")
+
+
+def _did_you_mean(text: str) -> str:
+    hint = difflib.get_close_matches(text, robots(), n=1)
+    return f" (did you mean {hint[0]!r}?)" if hint else ""
+
+
+def robot_named_in(file: str | Path, name: str, field: str = "robot") -> Robot:
+    """The robot a file names in one of its fields, by `robot`'s rule, relative to that file.
+
+    Raises
+    ------
+    ModelFileError
+        Naming `file` and `field` when the name is neither built in nor a loadable file (an
+        invalid robot file raises its own ModelFileError, naming that file).
+    """
+    try:
+        return robot(name, Path(file).parent)
+    except ModelFileError:
+        raise
+    except InputError:
+        raise ModelFileError(str(file), field, "a built-in robot name or a robot file",
+                             found_text(name) + _did_you_mean(str(name))) from None

@@ -19,8 +19,8 @@ u_i = d2s/dt2 at each grid point (u continuous, unlike TOPP-RA's u constant betw
   without an acceleration step.
 
 The plan becomes a motion as s(t): a quintic in time on each interval matching s, ds/dt and
-d2s/dt2 at both ends (so acceleration is continuous), composed with the path's cubic pieces
-into an exact piecewise polynomial q(t) of degree 15.
+d2s/dt2 at both ends (so acceleration is continuous), composed with the path's pieces into an
+exact piecewise polynomial q(t) (of degree 15 for a cubic path).
 
 How the limits hold between samples: on every piece of the result, joint velocity, acceleration
 and jerk are polynomials in time; their largest magnitude on the piece is found exactly, at the
@@ -39,13 +39,15 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
 
 from armkit.errors import InputError
-from armkit.trajectory.piecewise import Trajectory, falling_factorial, shift
+from armkit.trajectory.bounds import peaks
+from armkit.trajectory.piecewise import Trajectory, shift
 from armkit.trajectory.polynomial import limits
 from armkit.trajectory.retiming import RetimeResult, waypoint_path
 
 ROUNDS = 12           # linear programmes at most, after the one without jerk limits
 GROWTH = 1.1          # how much faster than the last plan the next may be, anywhere
 FLOOR = 0.02          # of the fastest speed: the least bound on ds/dt anywhere
+SMOOTHING = 5.0       # cost of u's total variation, per fastest |u|, against x's (below)
 SETTLED = 0.002       # rounds stop when the motion gets shorter by less than this fraction
 MARGIN = 1e-9         # relative, kept in hand against rounding in the final check
 END = 1.5             # x_1 = END u_1 ds on a first interval at constant jerk from rest
@@ -60,8 +62,8 @@ def retime_jerk(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike,
     Parameters
     ----------
     path : Trajectory or array_like (k, n)
-        The geometric path: a trajectory of degree 3 at most (a cubic spline, as
-        `waypoint_path` makes) whose time is read as the path parameter, or waypoints.
+        The geometric path: a trajectory whose time is read as the path parameter (a cubic
+        spline through waypoints, as `waypoint_path` makes), or waypoints.
     vmax, amax, jmax : float or array_like (n,)
         Velocity (rad/s, m/s), acceleration (/s^2) and jerk (/s^3) limits, positive; the
         acceleration and jerk limits finite.
@@ -91,8 +93,6 @@ def retime_jerk(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike,
     """
     if not isinstance(path, Trajectory):
         path = waypoint_path(path)
-    if path.degree > 3:
-        raise InputError(f"path: expected pieces of degree 3 at most, found {path.degree}")
     n = path.n
     V, A, J = (limits(name, x, n) for name, x in (("vmax", vmax), ("amax", amax),
                                                    ("jmax", jmax)))
@@ -106,6 +106,7 @@ def retime_jerk(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike,
     fastest = plan.fastest()
     if fastest is None:
         return RetimeResult(False, None, "exceeds the limits", float(path.start))
+    plan.cost = plan.cost / max(fastest[0].max(), 1e-300)     # x per the fastest plan's
     # Sequential linear programmes: each plan's speed bounds the next (times GROWTH), so each
     # is within the jerk limits at its rows; the first is bounded by the fastest plan.
     best, reference, growth = None, np.sqrt(np.maximum(fastest[0], 0.0)), 1.0
@@ -115,12 +116,17 @@ def retime_jerk(path: Trajectory | ArrayLike, vmax: ArrayLike, amax: ArrayLike,
             break
         duration = float(_durations(s, *found).sum())
         if best is not None and duration > best[0] * (1 - SETTLED):
-            if duration < best[0]:
-                best = (duration, *found)
             break
         best, reference, growth = (duration, *found), np.sqrt(np.maximum(found[0], 0.0)), GROWTH
     if best is None or not np.isfinite(best[0]):
         return RetimeResult(False, None, "stops inside the path", float(path.start))
+    # Last, the same speed bound once more with a cost on the acceleration's total variation:
+    # among plans about as fast, the one whose acceleration does not alternate between grid
+    # points (a linear programme leaves that free where a velocity bound holds the speed).
+    smooth = plan.solve(np.sqrt(np.maximum(best[1], 0.0)), 1.0,
+                        smoothing=SMOOTHING / max(np.abs(fastest[1]).max(), 1e-300))
+    if smooth is not None and np.isfinite(_durations(s, *smooth).sum()):
+        best = (0.0, *smooth)
     _, x, u = best
     sd = np.sqrt(np.maximum(x, 0.0))
     dt = _durations(s, x, u)
@@ -191,14 +197,17 @@ class _Plan:
         self.bounds = np.zeros((2 * (N + 1), 2))
         self.bounds[1:N, 1] = np.minimum(xv[1:-1], 1e300)
         self.bounds[N + 2:2 * N + 1] = [-np.inf, np.inf]
-        # Maximise the speed: x weighted by the length of path each grid point stands for.
+        # Maximise the speed: x weighted by the length of path each grid point stands for
+        # (`retime_jerk` divides it by the largest x of the fastest plan).
         weight = np.r_[ds / 2, 0.0] + np.r_[0.0, ds / 2]
         self.cost = np.r_[-weight / weight.max(), np.zeros(N + 1)]
 
-    def solve(self, reference: NDArray, growth: float) -> tuple[NDArray, NDArray] | None:
+    def solve(self, reference: NDArray, growth: float,
+              smoothing: float = 0.0) -> tuple[NDArray, NDArray] | None:
         """(x, u) of the fastest plan whose speed stays within `growth` times `reference`
         (N + 1,) ds/dt, its jerk rows taking that bound as ds/dt: a plan within the jerk
-        limits (at the rows), since the true ds/dt is no larger. None when there is none."""
+        limits (at the rows), since the true ds/dt is no larger. None when there is none.
+        `smoothing` is the cost of a unit of u's total variation (see `_run`)."""
         N, n = self.N, self.n
         # A floor lets a point where the last plan stopped move again.
         top = np.maximum(growth * reference, FLOOR * reference.max())
@@ -214,18 +223,36 @@ class _Plan:
         bounds = self.bounds.copy()
         bounds[:N + 1, 1] = np.minimum(bounds[:N + 1, 1], top ** 2)
         return self._run(sparse.vstack([self.acc, jerk, -jerk]).tocsr(),
-                         np.r_[self.acc_bound, bound, bound], bounds)
+                         np.r_[self.acc_bound, bound, bound], bounds, smoothing)
 
     def fastest(self) -> tuple[NDArray, NDArray] | None:
         """(x, u) of the fastest plan within the velocity and acceleration limits alone."""
         return self._run(self.acc, self.acc_bound, self.bounds)
 
-    def _run(self, A_ub, b_ub, bounds) -> tuple[NDArray, NDArray] | None:
-        done = linprog(self.cost, A_ub=A_ub, b_ub=b_ub, A_eq=self.eq, b_eq=np.zeros(self.N),
-                       bounds=bounds, method="highs")
+    def _run(self, A_ub, b_ub, bounds, smoothing: float = 0.0
+             ) -> tuple[NDArray, NDArray] | None:
+        """Solve with the rows given; with `smoothing`, plus that cost on the total variation
+        of u (N more variables d_i >= |u_{i+1} - u_i|)."""
+        N = self.N
+        cost, eq = self.cost, self.eq
+        if smoothing > 0:
+            i = np.arange(N)
+            change = sparse.csr_matrix((np.r_[-np.ones(N), np.ones(N)],
+                                        (np.r_[i, i], N + 1 + np.r_[i, i + 1])),
+                                       shape=(N, 2 * (N + 1)))
+            spread = sparse.hstack([sparse.vstack([change, -change]),
+                                    -sparse.vstack([sparse.eye(N), sparse.eye(N)])])
+            A_ub = sparse.vstack([sparse.hstack([A_ub, sparse.csr_matrix((A_ub.shape[0], N))]),
+                                  spread]).tocsr()
+            b_ub = np.r_[b_ub, np.zeros(2 * N)]
+            eq = sparse.hstack([eq, sparse.csr_matrix((N, N))]).tocsr()
+            cost = np.r_[cost, np.full(N, smoothing)]
+            bounds = np.r_[bounds, np.tile([0.0, np.inf], (N, 1))]
+        done = linprog(cost, A_ub=A_ub, b_ub=b_ub, A_eq=eq, b_eq=np.zeros(N), bounds=bounds,
+                       method="highs")
         if done.status != 0:
             return None
-        return done.x[:self.N + 1], done.x[self.N + 1:]
+        return done.x[:N + 1], done.x[N + 1:2 * (N + 1)]
 
 
 def _durations(s: NDArray, x: NDArray, u: NDArray) -> NDArray:
@@ -246,8 +273,9 @@ def _durations(s: NDArray, x: NDArray, u: NDArray) -> NDArray:
 
 
 def _compose(path: Trajectory, s: NDArray, sd: NDArray, u: NDArray, dt: NDArray) -> NDArray:
-    """Coefficients (N, 16, n) of q(s(tau)) per grid interval, s(tau) the quintic matching s,
-    ds/dt and d2s/dt2 at both ends of the interval (tau from 0 to dt)."""
+    """Coefficients (N, 5 d + 1, n) of q(s(tau)) per grid interval, d the path's degree and
+    s(tau) the quintic matching s, ds/dt and d2s/dt2 at both ends of the interval (tau from 0
+    to dt)."""
     N = dt.shape[0]
     ds = np.diff(s)
     # Quintic Hermite d(tau) = s(tau) - s_i with d(0) = 0, d'(0) = sd_i, d''(0) = u_i and
@@ -261,15 +289,16 @@ def _compose(path: Trajectory, s: NDArray, sd: NDArray, u: NDArray, dt: NDArray)
     a3 = (10 * r0 - 4 * r1 * h + r2 * h ** 2 / 2) / h ** 3
     a4 = (-15 * r0 + 7 * r1 * h - r2 * h ** 2) / h ** 4
     a5 = (6 * r0 - 3 * r1 * h + r2 * h ** 2 / 2) / h ** 5
-    d = np.zeros((N, 16))
-    d[:, 1:6] = np.c_[a1, a2, a3, a4, a5]
+    K = 5 * max(path.degree, 1) + 1
+    d = np.zeros((N, K))
+    d[:, 1:6] = np.c_[a1, a2, a3, a4, a5][:, :K - 1]
     # The path's piece under each interval (its middle: a grid point may lie a hair before a
     # break it stands for), re-expanded about the interval's start.
     piece = np.clip(np.searchsorted(path.breaks, s[:-1] + ds / 2, side="right") - 1, 0,
                     path.breaks.shape[0] - 2)
     c = shift(path.coefficients[piece], s[:-1] - path.breaks[piece])       # (N, K, n)
-    out = np.zeros((N, 16, path.n))
-    power = np.zeros((N, 16))
+    out = np.zeros((N, K, path.n))
+    power = np.zeros((N, K))
     power[:, 0] = 1.0
     for k in range(c.shape[1]):
         out += power[:, :, None] * c[:, k][:, None, :]
@@ -285,69 +314,6 @@ def _times(p: NDArray, q: NDArray) -> NDArray:
     for k in range(K):
         if p[:, k].any():
             out[:, k:] += p[:, k:k + 1] * q[:, :K - k]
-    return out
-
-
-def peaks(tr: Trajectory, derivative: int) -> NDArray:
-    """The largest |d^r q / dt^r| of every joint over the whole trajectory, exact, (n,).
-
-    On each piece the derivative is a polynomial; its extrema lie at the piece's ends or at the
-    real roots of the next derivative inside the piece, found as the eigenvalues of its
-    companion matrix, in the piece's time scaled to [0, 1] for conditioning.
-    """
-    c = tr.coefficients                                    # (m, K, n)
-    m, K, n = c.shape
-    h = np.diff(tr.breaks)
-    k = np.arange(K)
-    # Coefficients of the r-th derivative in the scaled time x = tau / h: c_k k!/(k-r)! h^(k-r).
-    deriv = np.zeros((m, K, n))
-    for j in range(derivative, K):
-        deriv[:, j - derivative] = c[:, j] * falling_factorial(j, derivative) \
-            * h[:, None] ** (j - derivative)
-    ends = np.maximum(np.abs(deriv.sum(axis=1)), np.abs(deriv[:, 0]))      # x = 1, x = 0
-    best = ends.max(axis=0)
-    # Slope in x, highest power first, per piece and joint.
-    slope = deriv[:, 1:] * k[1:, None]                       # (m, K - 1, n)
-    polys = slope.transpose(0, 2, 1).reshape(m * n, K - 1)   # lowest power first
-    degree = K - 2
-    while degree > 0 and not np.any(polys[:, degree]):
-        degree -= 1
-    if degree >= 1:
-        roots = _real_roots(polys[:, :degree + 1])           # (m * n, degree) NaN where none
-        x = np.where((roots > 0) & (roots < 1), roots, np.nan)
-        values = np.abs(_horner(deriv.transpose(0, 2, 1).reshape(m * n, K), x))
-        inside = np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=1)
-        best = np.maximum(best, inside.reshape(m, n).max(axis=0))
-    return best
-
-
-def _real_roots(polys: NDArray) -> NDArray:
-    """Real roots (rows, d) of polynomials (rows, d + 1), lowest power first, NaN for the
-    complex ones and for the missing ones of a row whose leading coefficient vanishes (its
-    roots are those of the polynomial of one degree less)."""
-    rows, d1 = polys.shape
-    d = d1 - 1
-    lead = polys[:, d]
-    ok = np.abs(lead) > 1e-14 * np.max(np.abs(polys), axis=1)
-    out = np.full((rows, d), np.nan)
-    if ok.any():
-        p = polys[ok] / lead[ok, None]
-        companion = np.zeros((p.shape[0], d, d))
-        companion[:, 1:, :-1] = np.eye(d - 1)
-        companion[:, :, -1] = -p[:, :d]
-        ev = np.linalg.eigvals(companion)
-        real = np.abs(ev.imag) <= 1e-7 * np.maximum(1.0, np.abs(ev.real))
-        out[ok] = np.where(real, ev.real, np.nan)
-    if (~ok).any():
-        out[~ok, :d - 1] = _real_roots(polys[~ok, :d])[:, :d - 1] if d > 1 else np.nan
-    return out
-
-
-def _horner(c: NDArray, x: NDArray) -> NDArray:
-    """Polynomials c (rows, K), lowest power first, at x (rows, S)."""
-    out = np.zeros(x.shape)
-    for k in range(c.shape[1] - 1, -1, -1):
-        out = out * x + c[:, k:k + 1]
     return out
 
 
