@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from numpy.typing import NDArray
 from scipy.spatial import ConvexHull, QhullError
 
@@ -203,8 +204,9 @@ def tool_path_figure(result: JobResult) -> Figure:
     ax3 = fig.add_subplot(1, 3, 1, projection="3d")
     top, side = fig.add_subplot(1, 3, 2), fig.add_subplot(1, 3, 3)
     drawn: list[NDArray] = []
-    meshes = [u.length_from_si(obstacle_mesh(o)[0]) for o in task.scene]
-    for v in meshes:
+    for o in task.scene:
+        v, f = obstacle_mesh(o)
+        v = u.length_from_si(v)
         drawn.append(v)
         for ax, (i, j) in ((top, (0, 1)), (side, (0, 2))):
             try:
@@ -212,7 +214,8 @@ def tool_path_figure(result: JobResult) -> Figure:
             except QhullError:                  # flat in this view
                 continue
             ax.fill(hull[:, 0], hull[:, 1], color="tab:red", alpha=0.35, lw=0)
-        ax3.scatter(*v.T, color="tab:red", s=2, alpha=0.3)
+        ax3.add_collection3d(Poly3DCollection(v[f], facecolor="tab:red", alpha=0.25,
+                                              edgecolor="none"))
     motion = result.motion
     if motion is not None and motion.trajectory is not None:
         q = motion.trajectory.sample_uniform(400).q
@@ -220,9 +223,10 @@ def tool_path_figure(result: JobResult) -> Figure:
         w = u.length_from_si(fk(robot, motion.q)[:, :3, 3])
         drawn += [p, w]
         for ax, idx in ((ax3, [0, 1, 2]), (top, [0, 1]), (side, [0, 2])):
-            ax.plot(*p[:, idx].T, color="tab:green", lw=2.2, label="tool path (planned motion)")
-            ax.scatter(*w[:, idx].T, color="tab:blue", s=16, zorder=3,
-                       label=f"{len(w)} waypoints sent")
+            ax.plot(*p[:, idx].T, color="tab:green", lw=2.5, zorder=3,
+                    label="tool path (planned motion)")
+            ax.scatter(*w[:, idx].T, s=22, zorder=4, facecolor="white", edgecolor="tab:blue",
+                       linewidth=1.2, label=f"{len(w)} waypoints sent")
         for k, (q_arm, shade) in enumerate(((q[0], "0.55"), (q[-1], "0.2"))):
             o = u.length_from_si(fk_frames(robot, q_arm)[:, :3, 3])
             drawn.append(o)
@@ -247,9 +251,10 @@ def tool_path_figure(result: JobResult) -> Figure:
     c, h = (lo + hi) / 2, max((hi - lo).max() / 2, 1e-9) * 1.08
     for set_lim, i in ((ax3.set_xlim, 0), (ax3.set_ylim, 1), (ax3.set_zlim, 2)):
         set_lim(c[i] - h, c[i] + h)
-    ax3.set_xlabel(f"x ({u.length})")
-    ax3.set_ylabel(f"y ({u.length})")
-    ax3.set_zlabel(f"z ({u.length})")
+    ax3.set_xlabel(f"x ({u.length})", labelpad=8)
+    ax3.set_ylabel(f"y ({u.length})", labelpad=8)
+    ax3.set_zlabel(f"z ({u.length})", labelpad=8)
+    ax3.set_box_aspect((1, 1, 1), zoom=0.85)
     ax3.set_title("in 3-D")
     for ax, (i, j), name in ((top, (0, 1), "from above"), (side, (0, 2), "from the side")):
         ax.set_aspect("equal", adjustable="datalim")
