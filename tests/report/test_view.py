@@ -12,8 +12,8 @@ import plotly.graph_objects as go
 import pytest
 
 import armkit
-from armkit.planning import Box, Scene
-from armkit.report.view import show, view_page
+from armkit.planning import Box, Scene, arm_geometry
+from armkit.report.view import capsule_bodies, show, view_page
 from tests.report.browser import Browser
 
 SET_JOINTS = """(() => {{
@@ -23,14 +23,20 @@ SET_JOINTS = """(() => {{
     s.dispatchEvent(new Event("input"));
   }}
   const out = document.getElementById("tool-pose");
+  const arm = document.getElementById("view").data[0];
+  const seen = [0, 1, 2, 3, 4].map((k) => Math.floor(k * (arm.x.length - 1) / 4));
   return [out.dataset.matrix, Array.from(document.querySelectorAll("input[data-joint]"),
-                                         (s) => Number(s.value))];
+                                         (s) => Number(s.value)),
+          seen.map((v) => [arm.x[v], arm.y[v], arm.z[v]]), seen];
 }})()"""
 
 
 def _moved(page: Path, profile: Path, robot, count: int, seed: int):
     """Open the page, set every slider to `count` random configurations (file units) one after
-    another; per configuration the values the sliders took and the page's tool pose."""
+    another; per configuration the values the sliders took and the page's tool pose; and
+    checks five of the drawn arm's vertices against armkit's link frames."""
+    bodies = capsule_bodies(arm_geometry(robot))
+    scale = 1000.0 if robot.units.length == "mm" else 1.0
     rng = np.random.default_rng(seed)
     lo, hi = robot.chain.sampling_limits
     found = []
@@ -38,8 +44,13 @@ def _moved(page: Path, profile: Path, robot, count: int, seed: int):
         browser.wait_for('document.getElementById("tool-pose")?.dataset.matrix')
         for q in rng.uniform(lo, hi, (count, robot.n)):
             wanted = robot.q_from_si(q)
-            matrix, taken = browser.evaluate(SET_JOINTS.format(values=json.dumps(
-                wanted.tolist())))
+            matrix, taken, drawn, which = browser.evaluate(SET_JOINTS.format(
+                values=json.dumps(wanted.tolist())))
+            frames = armkit.fk_frames(robot, robot.q_to_si(taken))[bodies.link[which]]
+            local = bodies.vertices[which]
+            expected = np.einsum("vij,vj->vi", frames[:, :3, :3], local) + frames[:, :3, 3]
+            # float32 vertices in the page: a micrometre's precision is plenty for a picture
+            np.testing.assert_allclose(np.array(drawn) / scale, expected, atol=2e-6)
             found.append((np.array(taken), np.array(json.loads(matrix)).reshape(4, 4)))
     return found
 

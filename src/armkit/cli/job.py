@@ -114,13 +114,20 @@ def view(robot: RobotArg,
              help="Joint values in the robot file's units (default: zero, or the nearest limit).",
              metavar="[Q...]", parser=number())] = None,
          out: Annotated[Path, typer.Option("--out", help="The HTML file to write.")] = Path(
-             "armkit-view.html")) -> None:
-    """Write an offline 3-D view of a robot, with a slider per joint that moves it."""
+             "armkit-view.html"),
+         tip: Annotated[str | None, typer.Option(
+             "--tip", help="URDF only: the link the chain ends at, where the tree has several."
+         )] = None) -> None:
+    """Write an offline 3-D view of a robot, with a slider per joint that moves it (a URDF's
+    visual meshes where it has them and trimesh is installed)."""
     import numpy as np
 
-    from armkit.report.view import view_page, write_page
+    from armkit.io.robot_files import load_robot as load_urdf
+    from armkit.io.visuals import read_visuals
+    from armkit.planning import arm_geometry
+    from armkit.report.view import view_page, visual_bodies, write_page
 
-    model = load_robot(robot)
+    model = load_robot(robot) if tip is None else load_urdf(robot, tip)
     if q and len(q) != model.n:
         raise InputError(f"Q: expected {model.n} joint values for {model.name}, found {len(q)}")
     if out.suffix.lower() not in (".html", ".htm"):
@@ -128,7 +135,24 @@ def view(robot: RobotArg,
     if out.exists() and not out.is_file():
         raise InputError(f"--out: expected a file armkit can write, found {out} (a directory)")
     q_si = model.q_to_si(q) if q else np.clip(0.0, model.lower, model.upper)
-    page = view_page(model, q_si, title=f"{model.name} at q = "
+    outside = (q_si < model.lower - 1e-12) | (q_si > model.upper + 1e-12)
+    if outside.any():
+        j = int(np.argmax(outside))
+        lo, hi = model.q_from_si(model.lower)[j], model.q_from_si(model.upper)[j]
+        raise InputError(f"Q: expected {model.joint_names[j]} within {lo:g}..{hi:g} "
+                         f"{model.joint_units[j]}, found {q[j]:g}")
+    bodies = None
+    try:
+        visuals = read_visuals(model)
+    except ImportError:
+        _say("the URDF's visual meshes need trimesh (pip install \"armkit[meshes]\"): "
+             "drawing the collision capsules")
+        visuals = None
+    if visuals is not None:
+        bodies = visual_bodies(visuals, arm_geometry(model))
+        for note in visuals.notes[:5]:
+            _say(f"not drawn: {note}")
+    page = view_page(model, q_si, bodies=bodies, title=f"{model.name} at q = "
                      f"{np.round(model.q_from_si(q_si), 3).tolist()}")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)

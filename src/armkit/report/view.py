@@ -12,6 +12,7 @@ file's unit; names from files are shown as text (`armkit.report.text`).
 
 from __future__ import annotations
 
+import base64
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +22,7 @@ import plotly.graph_objects as go
 from numpy.typing import ArrayLike, NDArray
 from plotly.offline import get_plotlyjs
 
+from armkit.io.visuals import Visuals
 from armkit.kinematics.forward import fk, fk_frames
 from armkit.model.robot import Robot, joint_array
 from armkit.planning import ArmGeometry, Box, Capsule, Cylinder, Sphere, arm_geometry
@@ -33,6 +35,7 @@ SIDES = 14          # facets around a capsule or cylinder
 FRAMES = 60         # most animation frames of a motion
 ARM_OPACITY = 0.45  # the frames and the path stay visible through the links
 REACH_SAMPLES = 400 # configurations whose link frames `view_page` keeps in view
+EYE = (1.35, -1.35, 0.85)   # the camera, from the centre, in the scene's own units
 
 
 @dataclass(frozen=True)
@@ -137,6 +140,38 @@ def capsule_bodies(geometry: ArmGeometry) -> Bodies:
                   "collision capsules")
 
 
+def visual_bodies(visuals: Visuals, geometry: ArmGeometry | None = None) -> Bodies:
+    """A URDF's visual elements (`armkit.io.visuals.read_visuals`) as surfaces; with
+    `geometry`, the collision capsules of the links that have no visual element too."""
+    vertices, links, faces, count = [], [], [], 0
+    for shape in visuals.shapes:
+        T = shape.T
+        if shape.kind == "mesh":
+            v, f = shape.vertices @ T[:3, :3].T + T[:3, 3], shape.faces
+        elif shape.kind == "box":
+            v, f = box_mesh(shape.size, T)
+        elif shape.kind == "sphere":
+            v, f = sphere_mesh(T[:3, 3], shape.size[0])
+        else:
+            half = T[:3, 2] * shape.size[1] / 2
+            v, f = tube(T[:3, 3] - half, T[:3, 3] + half, shape.size[0], caps="flat")
+        vertices.append(v)
+        links.append(np.full(len(v), shape.link))
+        faces.append(f + count)
+        count += len(v)
+    if geometry is not None:
+        covered = {shape.link for shape in visuals.shapes}
+        capsules = capsule_bodies(geometry)
+        keep = ~np.isin(capsules.link, list(covered))
+        kept_faces = capsules.faces[keep[capsules.faces].all(axis=1)]
+        index = np.cumsum(keep) - 1
+        vertices.append(capsules.vertices[keep])
+        links.append(capsules.link[keep])
+        faces.append(index[kept_faces] + count)
+    return Bodies(np.vstack(vertices), np.concatenate(links), np.vstack(faces).astype(int),
+                  "URDF visual meshes")
+
+
 def _placed(bodies: Bodies, frames: NDArray) -> NDArray:
     """Body vertices in the base frame, for link frames (n_joints + 1, 4, 4)."""
     T = frames[bodies.link]
@@ -160,9 +195,10 @@ def _arm_traces(robot: Robot, bodies: Bodies, q: NDArray, scale: float,
     """The arm at q: its surfaces, its frames' axes (x, y, z), and its skeleton (the joint
     origins, base to tool, with markers)."""
     frames = fk_frames(robot, q)
-    v = _placed(bodies, frames) * scale
-    traces = [go.Mesh3d(x=v[:, 0], y=v[:, 1], z=v[:, 2], i=bodies.faces[:, 0],
-                        j=bodies.faces[:, 1], k=bodies.faces[:, 2], color=ARM_COLOUR,
+    v = (_placed(bodies, frames) * scale).astype(np.float32)      # for the picture only
+    f = bodies.faces.astype(np.int32)
+    traces = [go.Mesh3d(x=v[:, 0], y=v[:, 1], z=v[:, 2], i=f[:, 0], j=f[:, 1], k=f[:, 2],
+                        color=ARM_COLOUR,
                         opacity=ARM_OPACITY, flatshading=True, name=f"arm ({bodies.source})",
                         showlegend=True, hoverinfo="name")]
     for k, points in enumerate(_axes(frames, length)):
@@ -239,6 +275,7 @@ def show(robot: Robot, q: ArrayLike | Trajectory, *, scene=None,
         every.append(np.asarray(target, float)[None, :3, 3] * scale)
     if also is not None:
         every.append(np.asarray(also, float).reshape(-1, 3) * scale)
+    arm = np.vstack(every[:3])
     points = np.vstack(every)
     lo, hi = points.min(axis=0), points.max(axis=0)
     size = float(np.max(hi - lo))
@@ -272,13 +309,20 @@ def show(robot: Robot, q: ArrayLike | Trajectory, *, scene=None,
                          grid[:, 1][~np.isnan(grid[:, 1])].min(), floor_z]) - pad
     hi = np.maximum(hi, [np.nanmax(grid[:, 0]), np.nanmax(grid[:, 1]), floor_z]) + pad
     extent = hi - lo
+    aspect = extent / extent.max()
     axes = {f"{c}axis": dict(title=f"{c} ({unit})", range=[lo[i], hi[i]],
                              backgroundcolor="white", gridcolor="#e5e5e5")
             for i, c in enumerate("xyz")}
+    # The camera on the arm, closer when the view holds far more than the arm (a reach).
+    middle = (arm.min(axis=0) + arm.max(axis=0)) / 2
+    centre = (middle - (lo + hi) / 2) / extent * aspect
+    zoom = float(np.clip(1.8 * np.ptp(arm, axis=0).max() / extent.max(), 0.4, 1.0))
+    eye = centre + zoom * np.array(EYE)
     fig.update_layout(
         title=plotly_text(title or robot.name), height=760, margin=dict(l=0, r=0, t=40, b=0),
-        scene=dict(aspectmode="manual", aspectratio=dict(zip("xyz", extent / extent.max())),
-                   camera=dict(eye=dict(x=1.35, y=-1.35, z=0.85)), **axes),
+        scene=dict(aspectmode="manual", aspectratio=dict(zip("xyz", aspect)),
+                   camera=dict(eye=dict(zip("xyz", eye)), center=dict(zip("xyz", centre))),
+                   **axes),
         legend=dict(x=0.01, y=0.98, bgcolor="rgba(255,255,255,0.75)"),
         meta=dict(axis_length=length / scale))        # m, the frames' axes
     if len(Q) > 1:
@@ -371,6 +415,12 @@ function rpy(T) {               // R = Rz(yaw) Ry(pitch) Rx(roll)
   return [Math.atan2(T[9], T[10]), Math.atan2(-T[8], Math.hypot(T[9], T[10])),
           Math.atan2(T[4], T[0])];
 }
+function typed(text, Kind) {   // a base64 string of little-endian values
+  const bytes = Uint8Array.from(atob(text), (c) => c.charCodeAt(0));
+  return new Kind(bytes.buffer);
+}
+const bodyLink = typed(chain.body_link, Int32Array);
+const bodyVertices = typed(chain.body_vertices, Float32Array);
 const view = document.getElementById("view");
 const sliders = Array.from(document.querySelectorAll("input[data-joint]"));
 function update() {
@@ -378,11 +428,12 @@ function update() {
   sliders.forEach((s) => { s.parentElement.querySelector(".value").textContent = Number(s.value).toPrecision(6); });
   const F = frames(q), k = chain.scale_view;
   const x = [], y = [], z = [];
-  for (let v = 0; v < chain.body_link.length; v++) {
-    const T = F[chain.body_link[v]], p = chain.body_vertices[v];
-    x.push(k * (T[0] * p[0] + T[1] * p[1] + T[2] * p[2] + T[3]));
-    y.push(k * (T[4] * p[0] + T[5] * p[1] + T[6] * p[2] + T[7]));
-    z.push(k * (T[8] * p[0] + T[9] * p[1] + T[10] * p[2] + T[11]));
+  for (let v = 0; v < bodyLink.length; v++) {
+    const T = F[bodyLink[v]];
+    const p0 = bodyVertices[3 * v], p1 = bodyVertices[3 * v + 1], p2 = bodyVertices[3 * v + 2];
+    x.push(k * (T[0] * p0 + T[1] * p1 + T[2] * p2 + T[3]));
+    y.push(k * (T[4] * p0 + T[5] * p1 + T[6] * p2 + T[7]));
+    z.push(k * (T[8] * p0 + T[9] * p1 + T[10] * p2 + T[11]));
   }
   const ax = [[], [], []], ay = [[], [], []], az = [[], [], []], ox = [], oy = [], oz = [];
   for (const T of F) {
@@ -424,7 +475,16 @@ def _chain_numbers(robot: Robot, bodies: Bodies, axis_length: float) -> dict:
             "length_from_si": float(u.length_from_si(1.0)),
             "angle_from_si": float(u.angle_from_si(1.0)), "unit": u.length,
             "angle": u.angle, "axis_length": axis_length,
-            "body_link": bodies.link.tolist(), "body_vertices": bodies.vertices.tolist()}
+            # The surfaces as base64 typed arrays: float32 (a micrometre's precision, for the
+            # picture only; the tool pose is computed in doubles) and int32.
+            "body_link": _base64(bodies.link, np.int32),
+            "body_vertices": _base64(bodies.vertices, np.float32)}
+
+
+def _base64(a: NDArray, dtype) -> str:
+    """An array as base64 of its little-endian bytes (the page reads it as a typed array)."""
+    return base64.b64encode(np.ascontiguousarray(a, np.dtype(dtype).newbyteorder("<"))
+                            .tobytes()).decode("ascii")
 
 
 def view_page(robot: Robot, q: ArrayLike, *, bodies: Bodies | None = None,
