@@ -55,7 +55,11 @@ def _moved(page: Path, profile: Path, robot, count: int, seed: int):
     return found
 
 
-@pytest.mark.parametrize("name", ["ur5", "water_supply"])
+SLOW = ["panda", "tool_changer_6dof", "stanford", "puma560", "inspection_6dof", "modular_4dof"]
+
+
+@pytest.mark.parametrize("name", ["ur5", "water_supply", *[
+    pytest.param(name, marks=pytest.mark.slow) for name in SLOW]])
 def test_sliders_move_the_arm_as_armkit_fk(name, tmp_path):
     robot = armkit.robot(name)
     page = tmp_path / f"{name}.html"
@@ -64,18 +68,6 @@ def test_sliders_move_the_arm_as_armkit_fk(name, tmp_path):
         expected = armkit.fk(robot, robot.q_to_si(taken))
         assert np.abs(T[:3, 3] - expected[:3, 3]).max() <= 1e-9           # m
         assert np.abs(T[:3, :3] - expected[:3, :3]).max() <= 1e-9
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("name", ["panda", "tool_changer_6dof", "stanford", "puma560",
-                                  "inspection_6dof", "modular_4dof"])
-def test_sliders_move_every_built_in_robot_as_armkit_fk(name, tmp_path):
-    robot = armkit.robot(name)
-    page = tmp_path / f"{name}.html"
-    page.write_text(view_page(robot, np.clip(0.0, robot.lower, robot.upper)))
-    for taken, T in _moved(page, tmp_path / "profile", robot, 10, seed=2):
-        expected = armkit.fk(robot, robot.q_to_si(taken))
-        assert np.abs(T - expected).max() <= 1e-9
 
 
 def test_show_returns_a_figure_of_the_arm_and_of_a_motion():
