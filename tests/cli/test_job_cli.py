@@ -187,6 +187,10 @@ def test_names_from_files_reach_the_report_as_text(tmp_path):
     (["view", "ur5", "--out", "view.png"], "--out"),
     (["view", "ur5", "--out", "/proc/view.html"], "--out"),
     (["view", "nobot"], "nobot"),
+    (["view", "water_supply", "5000", "0", "0", "0"],
+     "Q: expected lift within 0..600 mm, found 5000"),
+    (["view", "ur5", "--tip", "tool0"], "tip: expected none for a robot file"),
+    (["view", "ur5", "--tip"], "--tip"),
 ])
 def test_bad_arguments_are_one_line(args, words, tmp_path):
     done = armkit(*args, cwd=tmp_path)
