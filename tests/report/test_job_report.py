@@ -29,12 +29,12 @@ def test_a_directory_where_a_file_goes_is_refused(blocked, tmp_path):
 
 def test_a_file_where_the_folder_goes_is_refused(tmp_path):
     (tmp_path / "report").write_text("")
-    with pytest.raises(InputError, match="--out: expected a folder armkit can create"):
+    with pytest.raises(InputError, match="--out: expected a folder armkit can write, found "):
         check_report(demo_task(), tmp_path / "report")
 
 
 def test_a_folder_that_cannot_be_made_is_refused():
-    with pytest.raises(InputError, match="--out: expected a folder armkit can create, found "
+    with pytest.raises(InputError, match="--out: expected a folder armkit can write, found "
                                          "/proc/armkit-report"):
         check_report(demo_task(), "/proc/armkit-report")
 

@@ -156,6 +156,10 @@ def view(robot: RobotArg,
                      f"{np.round(model.q_from_si(q_si), 3).tolist()}")
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise InputError(f"--out: expected a folder armkit can write, found {out.parent} "
+                         f"({err.strerror or err})") from None
+    try:
         write_page(page, out)
     except OSError as err:
         raise InputError(f"--out: expected a file armkit can write, found {out} "

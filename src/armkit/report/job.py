@@ -76,7 +76,7 @@ def check_report(task: Task, folder: str | Path) -> Path:
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except (OSError, ValueError) as err:
-        raise InputError(f"--out: expected a folder armkit can create, found {folder} "
+        raise InputError(f"--out: expected a folder armkit can write, found {folder} "
                          f"({getattr(err, 'strerror', None) or err})") from None
     if not folder.is_dir():
         raise InputError(f"--out: expected a folder, found {folder} (not a directory)")
