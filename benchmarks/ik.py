@@ -43,7 +43,7 @@ from ikpy.link import OriginLink, URDFLink
 import armkit
 from armkit.jit import set_mode
 from armkit.kinematics.ik import IKSolver, ik
-from armkit.kinematics.ik.task import as_mask, task_errors
+from armkit.kinematics.ik.masks import as_mask, task_errors
 from armkit.spatial import matrix_to_rpy
 from common import Spread, interleaved, load, ratio
 

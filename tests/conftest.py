@@ -11,10 +11,32 @@ import armkit
 
 # Kernels compile on first use (numba caches them afterwards), so no per-example deadline.
 # CI runs the same examples every time (derandomize); local runs keep exploring new ones.
-settings.register_profile("armkit", deadline=None, max_examples=60,
+# `pytest` tries each property on 25 examples; `pytest -m slow` (which CI runs too) tries
+# every property on 300, beside the long fuzz runs.
+settings.register_profile("armkit", deadline=None, max_examples=25,
                           suppress_health_check=[HealthCheck.too_slow])
-settings.register_profile("ci", parent=settings.get_profile("armkit"), derandomize=True)
-settings.load_profile("ci" if os.environ.get("CI") else "armkit")
+settings.register_profile("thorough", parent=settings.get_profile("armkit"), max_examples=300)
+for name in ("armkit", "thorough"):
+    settings.register_profile(f"{name}-ci", parent=settings.get_profile(name), derandomize=True)
+CI = bool(os.environ.get("CI"))
+
+
+def _slow_run(config) -> bool:
+    return (config.option.markexpr or "").strip() == "slow"
+
+
+def pytest_configure(config):
+    profile = "thorough" if _slow_run(config) else "armkit"
+    settings.load_profile(f"{profile}-ci" if CI else profile)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """In the slow run, the property tests are run again with many examples."""
+    if _slow_run(config):
+        for item in items:
+            if getattr(getattr(item, "obj", None), "is_hypothesis_test", False):
+                item.add_marker(pytest.mark.slow)
 
 BUILTIN = armkit.robots()
 

@@ -34,6 +34,7 @@ _HOMES = {
                     "armkit.trajectory"),
     **dict.fromkeys(("Section", "Workspace", "workspace"), "armkit.sampled_workspace"),
     **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
+    "warm_up": "armkit.warmup",
     **dict.fromkeys(("check_waypoints", "send_waypoints", "DriveClient", "SimDrive"),
                     "armkit.drives"),
     "load_register_map": "armkit.io.register_maps",
@@ -71,6 +72,7 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.threads import get_num_threads, set_num_threads
     from armkit.trajectory import (RetimeResult, Trajectory, cubic, jerk_limited, quintic,
                                    retime, retime_jerk, spline, tool_motion, trapezoidal)
+    from armkit.warmup import warm_up
 
 
 __getattr__, __dir__ = lazy_names(__name__, _HOMES)

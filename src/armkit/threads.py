@@ -11,6 +11,8 @@ lowers.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 from armkit.errors import InputError
 
@@ -82,9 +84,22 @@ def idle_cores() -> int:
     return max(1, min(cores, int(cores - load + 1.0)))
 
 
-def threads_for(samples: int, grain: int) -> int:
+def threads_for(samples: int, grain: int, most: int | None = None) -> int:
     """Threads for a batch of `samples`, each thread being worth its start-up from `grain`
-    samples on; 1 means the serial kernel."""
+    samples on, at most `most` (default: `get_num_threads`); 1 means the serial kernel."""
     if samples < 2 * grain:
         return 1
-    return max(1, min(samples // grain, get_num_threads()))
+    return max(1, min(samples // grain, get_num_threads() if most is None else most))
+
+
+def in_ranges(work: Callable[[int, int], object], count: int, threads: int) -> list:
+    """``work(first, last)`` over [0, count): in one call on this thread if `threads` is 1,
+    else over ranges of about count / (8 threads) items (so that a thread that finishes early
+    takes more) on `threads` threads; the results in the ranges' order. `work` must release
+    the GIL for the threads to run at once (numba kernels declared ``nogil``)."""
+    if threads <= 1 or count <= 1:
+        return [work(0, count)]
+    size = max(1, -(-count // (8 * threads)))
+    ranges = [(first, min(count, first + size)) for first in range(0, count, size)]
+    with ThreadPoolExecutor(threads) as pool:
+        return list(pool.map(lambda r: work(*r), ranges))

@@ -50,6 +50,11 @@ ROWS: list[tuple[tuple[str, ...], str]] = [
     (("show", "{tmp}/bad_arm.yaml"), "{tmp}/bad_arm.yaml: joints[0].a: expected a valid number"),
     (("show", "{tmp}/empty.yaml"), "{tmp}/empty.yaml"),
     (("show", "{tmp}/broken.yaml"), "{tmp}/broken.yaml: line "),
+    # warm-up
+    (("warm-up", "--only", "foo"), "--only: expected some of kinematics, ik, trajectory, "
+                                   "planning, workspace (commas between), found 'foo'"),
+    (("warm-up", "--only", ""), "--only: expected some of"),
+    (("warm-up", "extra"), "armkit warm-up: expected no more arguments, found 'extra'"),
     # fk
     (("fk", "ur5", "a", "b", "c", "d", "e", "f"), "Q: expected a number from -1e+09 to 1e+09, "
                                                   "found 'a'"),

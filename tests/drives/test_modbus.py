@@ -64,7 +64,7 @@ def test_the_drive_moves_to_the_last_waypoint(inspection_map, sim):
     with DriveClient(inspection_map, port=sim.port, timeout=TIMEOUT) as drive:
         assert drive.write_waypoint(target) == 1
         first = drive.status()
-        deadline = time.monotonic() + 2.0
+        deadline = time.monotonic() + 60.0      # a hang, not a speed: it takes < 0.05 s
         status = first
         while not np.allclose(status.q, target, atol=1e-9) and time.monotonic() < deadline:
             time.sleep(0.01)

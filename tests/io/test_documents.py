@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 
 import pytest
 from pydantic import ValidationError
@@ -52,10 +51,8 @@ def test_size_bound_and_special_files(tmp_path):
         read_yaml(path, max_bytes=499)
     with pytest.raises(ModelFileError, match="expected a regular file, found a directory"):
         read_bytes(tmp_path)
-    start = time.monotonic()
     with pytest.raises(ModelFileError, match="/dev/zero: expected a regular file"):
-        read_text("/dev/zero")
-    assert time.monotonic() - start < 5          # not read at all, so never a hang
+        read_text("/dev/zero")                  # refused before reading: never a hang
     with pytest.raises(ModelFileError, match="expected a readable file"):
         read_text(tmp_path / "missing.yaml")
 
@@ -66,10 +63,20 @@ def test_found_text_bounds_its_work():
         nested = [nested]
     cases = [list(range(10**6)), dict.fromkeys(range(10**5)), "x" * 10**7,
              10**20000, nested, b"\x00" * 10**6, object()]
-    start = time.monotonic()
     texts = [found_text(value) for value in cases]
-    assert time.monotonic() - start < 1.0, "found_text did work in proportion to the value"
     assert all(len(t) <= 60 for t in texts), texts
+    taken = []
+
+    class Counted(list):
+        """A list that counts the items read from it."""
+
+        def __iter__(self):
+            for item in super().__iter__():
+                taken.append(item)
+                yield item
+
+    assert "0, 1, 2, " in found_text(Counted(range(10**6)))
+    assert len(taken) < 60, "found_text read items in proportion to the value"
     assert texts[0].startswith("[0, 1, 2, ") and texts[0].endswith("...")
     assert texts[3] == "an integer of about 20000 digits"
     assert texts[4].startswith("[[[[") and texts[6] == "a object"

@@ -28,8 +28,8 @@ def test_serial_and_parallel_kernels_agree():
     Q = random_q(robot, 2 * core.GRAIN + 5)
     k = robot.chain.kernel
     a, b = np.empty((len(Q), 4, 4)), np.empty((len(Q), 4, 4))
-    core.poses(Q, k.floats, k.ints, a)
-    core.poses_parallel(Q, k.floats, k.ints, b)
+    core.poses(Q, k.F, k.I, a)
+    core.poses_parallel(Q, k.F, k.I, b)
     np.testing.assert_array_equal(a, b)
 
 

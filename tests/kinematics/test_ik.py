@@ -16,7 +16,7 @@ import armkit
 from armkit.errors import InputError
 from armkit.kinematics.ik import analytic, default_mask, ik, ik_solutions
 from armkit.kinematics.ik.seeds import SeedBank, feature_columns, features
-from armkit.kinematics.ik.task import as_mask, task_errors
+from armkit.kinematics.ik.masks import as_mask, task_errors
 from armkit.model import DHRow, DHTable, Limits, Robot, ScrewRow, ScrewTable, chain_from_dh
 from armkit.model import chain_from_poe
 from armkit.spatial import rotx, transform

@@ -18,7 +18,7 @@ from armkit.errors import InputError
 from armkit.kinematics.ik import (OUT_OF_REACH, IKSolver, ik, ik_solutions, reach_bound,
                                   reasons)
 from armkit.kinematics.ik.numeric import TARGETS_PER_THREAD, thread_count
-from armkit.kinematics.ik.task import as_mask, task_errors
+from armkit.kinematics.ik.masks import as_mask, task_errors
 from armkit.spatial import rotx, roty, rotz, transform
 from tests.helpers import random_q
 
@@ -282,7 +282,7 @@ def test_seed_starts_of_one_target_equal_its_row_of_a_batch():
 
 
 def test_every_mask_has_its_forms_and_name():
-    from armkit.kinematics.ik.task import MASK_FORMS, NAMED_MASKS, mask_forms, mask_name
+    from armkit.kinematics.ik.masks import MASK_FORMS, NAMED_MASKS, mask_forms, mask_name
     assert len(MASK_FORMS) == 63
     for flags, forms in MASK_FORMS.items():
         mask = np.array(flags, dtype=bool)

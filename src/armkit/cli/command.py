@@ -172,7 +172,8 @@ COMMAND_MODULES = {"handeye": "calibration", "calibrate": "calibration",
                    "accuracy": "calibration", "send": "drives", "sim-drive": "drives",
                    "ik": "ik", "run": "job", "demo": "job", "view": "job",
                    "detect": "perception", "plan": "plan", "robots": "robots", "show": "robots",
-                   "fk": "robots", "traj": "trajectory", "workspace": "workspace"}
+                   "fk": "robots", "traj": "trajectory", "warm-up": "warmup",
+                   "workspace": "workspace"}
 MODULES = tuple(dict.fromkeys(COMMAND_MODULES.values()))
 
 JsonFlag = Annotated[bool, typer.Option("--json", help="Print one JSON document and nothing else.")]

@@ -55,7 +55,7 @@ from armkit.io.register_maps import builtin_register_map, load_register_map
 from armkit.io.robot_files import MAX_LENGTH, robot_named_in
 from armkit.io.scene import Obstacle, obstacle_from_field, read_scene
 from armkit.kinematics.forward import fk
-from armkit.kinematics.ik.task import NAMED_MASKS
+from armkit.kinematics.ik.masks import NAMED_MASKS
 from armkit.model.chain import freeze
 from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Scene
@@ -75,7 +75,7 @@ class PoseTarget:
     T_camera_target : ndarray, (4, 4)
         m.
     mask : str or None
-        What inverse kinematics must match (`armkit.kinematics.ik.task.NAMED_MASKS`); None:
+        What inverse kinematics must match (`armkit.kinematics.ik.masks.NAMED_MASKS`); None:
         the robot's own.
     """
 

@@ -192,6 +192,42 @@ def frames_one(q, F, I, joint_frames, out):
     store_pose(T, out)
 
 
+@_inline
+def axes_to_columns(axes, I, n, px, py, pz):
+    """Turn the joint origins o_i (rows 0-2) and axes z_i (rows 3-5) held in axes (6, n) into
+    the Jacobian's columns for the tool origin p: ``(z_i x (p - o_i), z_i)`` for a revolute
+    joint, ``(z_i, 0)`` for a prismatic one."""
+    for i in range(n):
+        zx, zy, zz = axes[3, i], axes[4, i], axes[5, i]
+        if joint_kind(I, i) == 0:
+            dx, dy, dz = px - axes[0, i], py - axes[1, i], pz - axes[2, i]
+            axes[0, i] = zy * dz - zz * dy
+            axes[1, i] = zz * dx - zx * dz
+            axes[2, i] = zx * dy - zy * dx
+        else:
+            axes[0, i], axes[1, i], axes[2, i] = zx, zy, zz
+            axes[3, i], axes[4, i], axes[5, i] = 0.0, 0.0, 0.0
+
+
+@_jit
+def jacobian_one(q, F, I, J):
+    """Geometric Jacobian (6, n), base frame, of one configuration q (n,) into J, for a chain
+    without mimic joints (moving joint i is column i); False if q is not finite. The same
+    products as `pose_jacobian_one`, with the pose in 12 scalars and no pose written."""
+    nj = joint_count(I)
+    T = pose_start(F, pre_at(nj))
+    finite = True
+    for i in range(nj):
+        value = joint_value(q, F, I, nj, i)
+        finite &= math.isfinite(value)
+        T = move(T, joint_kind(I, i), value)
+        J[0, i], J[1, i], J[2, i] = T[3], T[7], T[11]          # o_i, for now
+        J[3, i], J[4, i], J[5, i] = T[2], T[6], T[10]          # z_i
+        T = then(T, F, link_at(nj, i))
+    axes_to_columns(J, I, nj, T[3], T[7], T[11])
+    return finite
+
+
 @_jit
 def pose_jacobian_one(q, F, I, out, J):
     """Tool pose into out (4, 4) and the geometric Jacobian (6, n), base frame, into J.
@@ -234,17 +270,7 @@ def pose_jacobian_one(q, F, I, out, J):
             out[r, 1] = a * F[lk + 1] + b * F[lk + 5] + d * F[lk + 9]
             out[r, 2] = a * F[lk + 2] + b * F[lk + 6] + d * F[lk + 10]
             out[r, 3] = a * F[lk + 3] + b * F[lk + 7] + d * F[lk + 11] + p
-    px, py, pz = out[0, 3], out[1, 3], out[2, 3]
-    for i in range(n):
-        zx, zy, zz = axes[3, i], axes[4, i], axes[5, i]
-        if joint_kind(I, i) == 0:
-            dx, dy, dz = px - axes[0, i], py - axes[1, i], pz - axes[2, i]
-            axes[0, i] = zy * dz - zz * dy
-            axes[1, i] = zz * dx - zx * dz
-            axes[2, i] = zx * dy - zy * dx
-        else:
-            axes[0, i], axes[1, i], axes[2, i] = zx, zy, zz
-            axes[3, i], axes[4, i], axes[5, i] = 0.0, 0.0, 0.0
+    axes_to_columns(axes, I, n, out[0, 3], out[1, 3], out[2, 3])
     if coupled:
         J[:, :] = 0.0
         for i in range(n):
@@ -264,6 +290,8 @@ def _poses_numpy(Q, F, I, out):
     for i in range(nj):
         value = joint_scale(F, nj, i) * Q[:, joint_source(I, nj, i)] + F[i]
         if joint_kind(I, i) == 0:
+            # math's cosine of inf raises where numba's is NaN: give it NaN.
+            value = np.where(np.isinf(value), np.nan, value)
             T = turn(T, np.fromiter(map(math.cos, value), float, N),
                       np.fromiter(map(math.sin, value), float, N))
         else:

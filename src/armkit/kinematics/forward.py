@@ -35,20 +35,20 @@ def fk(robot: Robot, q: ArrayLike) -> NDArray:
     >>> armkit.fk(armkit.robot("ur5"), np.zeros(6))[:3, 3]
     array([-0.81725 , -0.19145 , -0.005491])
     """
-    k = robot.chain.kernel
-    if (type(q) is np.ndarray and q.dtype is FLOAT and q.shape == robot.chain.lower.shape
-            and q.flags.c_contiguous):
+    chain = robot.chain
+    k = chain.kernel
+    if type(q) is np.ndarray and q.dtype is FLOAT and q.shape == chain.lower.shape:
         # One configuration from Python: straight to the kernel, the chain packed in two
         # arrays (what numba's dispatcher costs grows with the arrays passed); the kernel also
         # checks finiteness (a non-finite q falls through to joint_array, which says what is
         # wrong).
         out = np.empty((4, 4))
-        if core.pose_one.light(q, k.floats, k.ints, out):
+        if core.pose_one.light(q, k.F, k.I, out):
             return out
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     out = np.empty((flat.shape[0], 4, 4))
-    core.run(core.poses, core.poses_parallel, flat, k.floats, k.ints, out,
+    core.run(core.poses, core.poses_parallel, flat, k.F, k.I, out,
                  few=core.LIGHT_POSES)
     return out.reshape(q.shape[:-1] + (4, 4))
 
@@ -69,7 +69,7 @@ def joint_frames(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     frames = np.empty((flat.shape[0], n, 4, 4))
     out = np.empty((flat.shape[0], 4, 4))
     k = robot.chain.kernel
-    core.run(core.frames, core.frames_parallel, flat, k.floats, k.ints, frames,
+    core.run(core.frames, core.frames_parallel, flat, k.F, k.I, frames,
                  out)
     lead = q.shape[:-1]
     return frames.reshape(lead + (n, 4, 4)), out.reshape(lead + (4, 4))

@@ -41,19 +41,17 @@ def streamed(compute, q: NDArray, tail: tuple[int, ...]) -> NDArray:
 def pose_and_jacobian(robot: Robot, q: ArrayLike) -> tuple[NDArray, NDArray]:
     """Tool pose (..., 4, 4) and geometric Jacobian in the base frame (..., 6, n), one pass."""
     k = robot.chain.kernel
-    if (type(q) is np.ndarray and q.dtype is FLOAT and q.shape == robot.chain.lower.shape
-            and q.flags.c_contiguous):
+    if type(q) is np.ndarray and q.dtype is FLOAT and q.shape == robot.chain.lower.shape:
         # One configuration from Python: straight to the kernel, the chain packed in two
         # arrays (as `fk`); the kernel checks finiteness.
         T, J = np.empty((4, 4)), np.empty((6, q.shape[0]))
-        if core.pose_jacobian_one.light(q, k.floats, k.ints, T, J):
+        if core.pose_jacobian_one.light(q, k.F, k.I, T, J):
             return T, J
     q = joint_array(robot, q)
     flat = q.reshape(-1, robot.n)
     T = np.empty((flat.shape[0], 4, 4))
     J = np.empty((flat.shape[0], 6, robot.n))
-    core.run(core.pose_jacobians, core.pose_jacobians_parallel, flat, k.floats,
-                 k.ints, T, J)
+    core.run(core.pose_jacobians, core.pose_jacobians_parallel, flat, k.F, k.I, T, J)
     lead = q.shape[:-1]
     return T.reshape(lead + (4, 4)), J.reshape(lead + (6, robot.n))
 
@@ -84,6 +82,14 @@ def jacobian(robot: Robot, q: ArrayLike, frame: Frame = "base") -> NDArray:
         If the last axis of q is not robot.n, or frame is not "base" or "tool".
     """
     if frame == "base":
+        chain = robot.chain
+        k = chain.kernel
+        if (type(q) is np.ndarray and q.dtype is FLOAT and q.shape == chain.lower.shape
+                and k.independent):
+            # One configuration from Python, as `fk`: J is all the kernel writes.
+            J = np.empty((6, q.shape[0]))
+            if core.jacobian_one.light(q, k.F, k.I, J):
+                return J
         return pose_and_jacobian(robot, q)[1]
     if frame != "tool":
         raise InputError(f"frame: expected 'base' or 'tool', found {frame!r}")

@@ -425,12 +425,15 @@ class KernelChain:
     tool); after (n_joints - 1, 4, 4): from joint i's motion to link frame i (the last link
     frame is the tool).
 
-    The kernels take the same chain packed in two read-only arrays, `floats` and `ints` (two
-    arrays cross numba's dispatcher in a fraction of the time of six, which is most of the
-    cost of one configuration's pose): ints (2 n_joints,) is kinds then source; floats
+    The kernels take the same chain packed in two arrays, `floats` and `ints` (two arrays
+    cross numba's dispatcher in a fraction of the time of six, which is most of the cost of
+    one configuration's pose): ints (2 n_joints,) is kinds then source; floats
     (2 n_joints + 12 + 12 n_joints,) is offsets, scale, the top three rows of pre (3, 4)
     row by row, then those of each link (n_joints, 3, 4) (the last row of a rigid transform is
-    always 0 0 0 1).
+    always 0 0 0 1); `armkit.kinematics.core` reads them through named accessors. `floats`
+    and `ints` are read-only; `F` and `I` are the same arrays as the kernels are called with,
+    writable only because numba's dispatcher takes a writable array about 80 ns faster: never
+    write them.
     """
 
     kinds: NDArray
@@ -442,15 +445,24 @@ class KernelChain:
     scale: NDArray
     floats: NDArray = field(init=False, repr=False)
     ints: NDArray = field(init=False, repr=False)
+    F: NDArray = field(init=False, repr=False)
+    I: NDArray = field(init=False, repr=False)    # noqa: E741 (the kernels' name)
+    independent: bool = field(init=False, repr=False)
+    """No mimic joint: moving joint i is value i of q, with scale 1."""
 
     def __post_init__(self):
         floats = np.concatenate([self.offsets, self.scale, np.reshape(self.pre[:3], -1),
                                  np.reshape(self.links[:, :3], -1)]).astype(float)
         ints = np.concatenate([self.kinds, self.source]).astype(np.int64)
-        floats.setflags(write=False)
-        ints.setflags(write=False)
-        object.__setattr__(self, "floats", floats)
-        object.__setattr__(self, "ints", ints)
+        object.__setattr__(self, "F", floats)
+        object.__setattr__(self, "I", ints)
+        object.__setattr__(self, "floats", floats.view())
+        object.__setattr__(self, "ints", ints.view())
+        self.floats.setflags(write=False)
+        self.ints.setflags(write=False)
+        object.__setattr__(self, "independent",
+                           bool(np.array_equal(self.source, np.arange(len(self.source)))
+                                and (self.scale == 1.0).all()))
 
     def motion_ends(self, lower: ArrayLike, upper: ArrayLike) -> NDArray:
         """(2, n_joints): each moving joint's motion ``scale * q[source] + offset`` at the

@@ -27,7 +27,7 @@ from armkit.errors import InputError
 from armkit.kinematics.forward import fk
 from armkit.kinematics.ik import IKSolver
 from armkit.kinematics.ik.reasons import OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR
-from armkit.kinematics.ik.task import as_mask, mask_name, task_errors
+from armkit.kinematics.ik.masks import as_mask, mask_name, task_errors
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform, exp_so3, log_so3, rotation_angle
 

@@ -21,7 +21,7 @@ from armkit.kinematics.ik.solver import (BANK_SAMPLES, METHODS, IKResult, IKSolu
                                          IKTrack, default_mask, reach_bound)
 
 BANK_FROM = 64      # targets per ik() call from which a seed bank pays for its building
-from armkit.kinematics.ik.task import NAMED_MASKS
+from armkit.kinematics.ik.masks import NAMED_MASKS
 from armkit.model.robot import Robot
 
 

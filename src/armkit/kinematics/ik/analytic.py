@@ -33,15 +33,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from armkit.jit import kernel
+from armkit.jit import FEW, kernel
 from armkit.kinematics import core
-from armkit.kinematics.ik.task import mask_forms, task_errors_one
+from armkit.kinematics.ik.masks import mask_forms, task_errors_one
 from armkit.model.chain import Chain
+from armkit.threads import in_ranges, threads_for
 
 PARALLEL = 1e-9          # |w_i x w_j| below this: parallel axes
 MEET = 1e-9              # distance (m) below this: intersecting axes
 ACOS_SLACK = 1e-9        # |cos| up to 1 + this is rounding at a boundary, clipped to 1
 SAME = 1e-9              # branches closer than this in every joint are one solution
+TARGETS_PER_THREAD = 128  # a thread is worth its start from this many targets (about 5 us each)
 
 # error_model="numpy": a division by zero gives inf or NaN (a branch without a solution), as
 # in NumPy, instead of raising. Compilation on an empty cache is what these kernels cost most
@@ -627,7 +629,7 @@ def _owned(a: NDArray) -> NDArray:
 
 
 def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, mask: NDArray,
-               tol_position: float, tol_rotation: float):
+               tol_position: float, tol_rotation: float, threads: int | None = None):
     """Every branch of the family's closed form for targets (N, 4, 4), checked.
 
     Parameters
@@ -638,6 +640,8 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
         The task the errors measure.
     tol_position, tol_rotation : float
         m and rad: a branch within both reaches its target.
+    threads : int, optional
+        Most threads a large batch may use (default: `armkit.threads`' choice).
 
     Returns
     -------
@@ -656,7 +660,12 @@ def candidates(chain: Chain, family: Family, targets: NDArray, q_ref: NDArray, m
     flags = np.empty((N, K, 4), dtype=np.bool_)
     k = chain.kernel
     targets, q_ref = _owned(targets), _owned(q_ref)
-    family.kernel.sized(N, family.geometry, targets, q_ref, family.limits, (k.floats, k.ints),
-                        mask_forms(mask).ints, np.array([tol_position, tol_rotation]), q, errors,
-                        flags)
+    args = (family.limits, (k.F, k.I), mask_forms(mask).ints,
+            np.array([tol_position, tol_rotation]))
+    if N <= FEW:
+        family.kernel.light(family.geometry, targets, q_ref, *args, q, errors, flags)
+    else:
+        in_ranges(lambda a, b: family.kernel(family.geometry, targets[a:b], q_ref[a:b], *args,
+                                             q[a:b], errors[a:b], flags[a:b]),
+                  N, threads_for(N, TARGETS_PER_THREAD, threads))
     return q, errors, flags

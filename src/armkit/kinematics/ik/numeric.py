@@ -3,7 +3,7 @@
 Each target is solved by its own iterations inside one numba kernel (``solve_targets``); a
 large batch is split over threads (the kernels release the GIL), a small one runs on the
 calling thread. Per iteration: tool pose and Jacobian (one kernel pass), the task residual and
-its Jacobian (`armkit.kinematics.ik.task.task_residual`), and the step
+its Jacobian (`armkit.kinematics.ik.masks.task_residual`), and the step
 
 - ``newton`` (the inspection-robot paper's method): the least-norm solution of ``A dq = e``,
   taken whole; done when the pose is within the tolerances, stuck when no step is left
@@ -36,15 +36,14 @@ call.
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
 from armkit.jit import kernel
 from armkit.kinematics.core import pose_jacobian_one
-from armkit.kinematics.ik.task import mask_forms, task_errors_one, task_residual
-from armkit.threads import threads_for
+from armkit.kinematics.ik.masks import mask_forms, task_errors_one, task_residual
+from armkit.threads import in_ranges, threads_for
 
 # error_model="numpy": no exception paths for a division by zero (smaller code, faster
 # compiles); the kernels guard their divisions themselves.
@@ -67,9 +66,7 @@ def thread_count(targets: int, threads: int | None = None) -> int:
     """Threads for a batch of `targets`: one per `TARGETS_PER_THREAD` targets, at most
     `threads` (default: `armkit.threads`' choice, the idle cores or the bound the user set),
     so a small batch, or one on a busy machine, runs on the calling thread."""
-    if threads is None:
-        return threads_for(targets, TARGETS_PER_THREAD)
-    return max(1, min(threads, targets // TARGETS_PER_THREAD))
+    return threads_for(targets, TARGETS_PER_THREAD, threads)
 
 
 # --- kernels ----------------------------------------------------------------------------------
@@ -370,7 +367,7 @@ class KernelArgs:
         """The robot's chain packed (`KernelChain.floats`, `KernelChain.ints`) and its
         `Chain.kernel_limits`: arrays the model computes once."""
         k = robot.chain.kernel
-        return cls((k.floats, k.ints), robot.chain.kernel_limits)
+        return cls((k.F, k.I), robot.chain.kernel_limits)
 
 
 def task_args(mask: np.ndarray, tol_position: float, tol_rotation: float) -> tuple:
@@ -404,15 +401,8 @@ def solve(kernel_args: KernelArgs, targets: np.ndarray, starts: np.ndarray, task
             kernel_args.limits, task, (int(max_iter), int(restarts), METHOD_CODES[method],
                                        int(seed), 0, 0.0, int(polish)), q, converged,
             iterations, errors)
-    workers = thread_count(N, threads)
-    if workers == 1:
-        solve_targets(0, N, *args)
-    else:
-        # Interleaved chunks share the work out evenly; the kernel releases the GIL.
-        chunk = max(16, N // (8 * workers))
-        bounds = [(a, min(N, a + chunk)) for a in range(0, N, chunk)]
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(lambda ab: solve_targets(ab[0], ab[1], *args), bounds))
+    in_ranges(lambda first, last: solve_targets(first, last, *args), N,
+              thread_count(N, threads))
     return q, converged, iterations, errors
 
 

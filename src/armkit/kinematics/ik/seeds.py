@@ -154,7 +154,7 @@ class SeedBank:
         # one thread, and thread start-up on a busy machine would cost ten times that.
         T = np.empty((samples, 4, 4))
         k = robot.chain.kernel
-        core.poses.light(Q, k.floats, k.ints, T)
+        core.poses.light(Q, k.F, k.I, T)
         P = np.ascontiguousarray(T[:, :3, 3])
         G = max(1, round(samples ** (1 / 3)))
         lo = P.min(axis=0)

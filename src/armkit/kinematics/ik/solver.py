@@ -19,16 +19,18 @@ from armkit.errors import InputError
 from armkit.kinematics import core
 from armkit.kinematics.forward import FLOAT
 from armkit.kinematics.ik import analytic, numeric
-from armkit.kinematics.ik.choose import CRITERIA, scores
+from armkit.kinematics.ik.choose import (CRITERIA, CRITERION_CODES, USABLE, pick, scores)
 from armkit.kinematics.ik.reasons import (OK, OUT_OF_REACH, OUTSIDE_JOINT_LIMITS, SINGULAR,
                                           not_converged)
 from armkit.kinematics.ik.seeds import SeedBank
-from armkit.kinematics.ik.task import MASK_FORMS, NAMED_MASKS, as_mask, mask_name
+from armkit.kinematics.ik.masks import MASK_FORMS, NAMED_MASKS, as_mask, mask_name
 from armkit.kinematics.jacobian import pose_and_jacobian
 from armkit.model.robot import Robot, joint_array
 from armkit.spatial import as_transform
 
 METHODS = ("auto", "analytic", "lm", "newton")
+_NO_SCORES = np.empty((0, 0))       # `pick` computes its own scores
+_ONES = np.ones(64)                 # "nearest"'s weights when none are given
 SEEDS = 8           # nearest sampled configurations tried first by the numeric solvers
 BANK_SAMPLES = 4096
 
@@ -70,7 +72,7 @@ class IKResult:
     position_error : float or ndarray, (...,)
         m, by forward kinematics of q.
     rotation_error : float or ndarray, (...,)
-        rad, by forward kinematics of q (see `armkit.kinematics.ik.task` for the measure).
+        rad, by forward kinematics of q (see `armkit.kinematics.ik.masks` for the measure).
     iterations : int or ndarray of int, (...,)
         Numeric iterations (0 for a closed form).
     reason : str or ndarray of str, (...,)
@@ -98,6 +100,9 @@ class IKResult:
     def to_dict(self) -> dict:
         """The result as JSON-serialisable values (lists for arrays, None for NaN/inf)."""
         return {name: _plain(getattr(self, name)) for name in self.__dataclass_fields__}
+
+
+_RESULT_FIELDS = tuple(IKResult.__dataclass_fields__)
 
 
 @dataclass(frozen=True)
@@ -145,6 +150,15 @@ class IKTrack:
 
     def to_dict(self) -> dict:
         return {name: _plain(getattr(self, name)) for name in self.__dataclass_fields__}
+
+
+def _one_result(*fields) -> IKResult:
+    """An IKResult of one target from its fields in order, already the right types: what the
+    dataclass's own __init__ does, without its nine frozen-attribute writes (a single call's
+    result is built in a fraction of a microsecond)."""
+    result = object.__new__(IKResult)
+    result.__dict__.update(zip(_RESULT_FIELDS, fields))
+    return result
 
 
 def _pose_fast(target) -> tuple[NDArray, list] | None:
@@ -236,7 +250,7 @@ class IKSolver:
     default_mask : ndarray of bool, (6,)
         The task solved when none is given.
     default_name : str
-        Its name (`armkit.kinematics.ik.task.mask_name`).
+        Its name (`armkit.kinematics.ik.masks.mask_name`).
 
     Notes
     -----
@@ -271,7 +285,8 @@ class IKSolver:
         self.__dict__.update(
             robot=robot, family=family, default_mask=forms.flags, default_name=forms.name,
             _reach_point=None, _kernel_args=None, _samples=int(samples), _seed=int(seed),
-            _threads=threads, _bank=None, _middle=None)
+            _threads=threads, _bank=None, _middle=None, _pick_bounds=None,
+            _one_shape=(robot.n,))
 
     def __setattr__(self, name, value):
         raise AttributeError(f"IKSolver is immutable: cannot set {name}")
@@ -335,7 +350,7 @@ class IKSolver:
             choice (the middle of the limits if omitted; the numeric solver then starts from
             the sampled configurations nearest the target).
         mask : str or 6 flags, optional
-            The task (see `armkit.kinematics.ik.task`): "pose", "position", "position+yaw",
+            The task (see `armkit.kinematics.ik.masks`): "pose", "position", "position+yaw",
             "position+pitch", "position+axis" or flags (x, y, z, rx, ry, rz). Default: the
             task the robot can do exactly (a full pose for six joints or more).
         method : {"auto", "analytic", "lm", "newton"}
@@ -368,12 +383,19 @@ class IKSolver:
             Bad shapes or values of the arguments (never for an unreachable target).
         """
         one = _pose_fast(targets)
-        if one is not None and (q0 is None or np.shape(q0) == (self.robot.n,)):
+        if one is not None and (q0 is None or getattr(q0, "shape", None) == self._one_shape
+                                or np.shape(q0) == self._one_shape):
             task_mask = self.default_mask if mask is None else as_mask(mask)
-            if self._family_for(task_mask, method) is None:
+            family = self._family_for(task_mask, method)
+            if family is None:
                 return self._solve_one(*one, q0, task_mask, method, criterion, weights,
                                        tol_position, tol_rotation, max_iter, restarts, seed,
                                        seeds)
+            result = self._solve_one_closed(*one, q0, task_mask, family, method, criterion,
+                                            weights, tol_position, tol_rotation, max_iter,
+                                            restarts, seed)
+            if result is not None:
+                return result
         request = self._validate(targets, q0, mask, method, criterion, weights, tol_position,
                                  tol_rotation, max_iter, restarts, seed, seeds)
         beyond = self._beyond(request.T)
@@ -432,7 +454,31 @@ class IKSolver:
             reason = str(self._numeric_reasons(q, np.zeros(1, bool), mask, int(max_iter),
                                                int(restarts))[0])
         name = self.default_name if mask is self.default_mask else mask_name(mask)
-        return IKResult(success, q[0], pe, re, int(iterations[0]), reason, label, criterion,
+        return _one_result(success, q[0], pe, re, int(iterations[0]), reason, label, criterion,
+                        name)
+
+    def _solve_one_closed(self, T, values, q0, mask, family, method, criterion, weights,
+                          tol_position, tol_rotation, max_iter, restarts, seed
+                          ) -> IKResult | None:
+        """One target whose closed form gives a usable branch: the batch path's candidates and
+        choice without its batch work (the same kernels, so the same result as that target in
+        a batch); None where the closed form alone does not settle it (out of reach, outside
+        the limits, a branch to polish), which the batch path then takes."""
+        weights = self._check_options(method, criterion, weights, tol_position, tol_rotation,
+                                      max_iter, restarts, seed)
+        x0, y0, z0, farthest = self._reach_test
+        dx, dy, dz = values[3] - x0, values[7] - y0, values[11] - z0
+        if math.sqrt(dx * dx + dy * dy + dz * dz) > farthest:
+            return None
+        q_ref = (self._mid if q0 is None else self._start(q0)[0, 0])[None]
+        C, errors, flags = analytic.candidates(self.robot.chain, family, T[None], q_ref, mask,
+                                               tol_position, tol_rotation)
+        branch, found = self._pick(C, errors, flags, q_ref, criterion, weights)[0].tolist()
+        if found != USABLE:
+            return None
+        pe, re = errors[0, branch].tolist()
+        name = self.default_name if mask is self.default_mask else mask_name(mask)
+        return _one_result(True, C[0, branch], pe, re, 0, OK, f"analytic:{family.name}", criterion,
                         name)
 
     def _start(self, q0) -> NDArray:
@@ -525,25 +571,20 @@ class IKSolver:
         family = request.family
         if family is None:
             return state
-        C, real, pe, re, reached, inside = self._candidates(request.T, request.q_ref,
-                                                            request.mask, request.tol_position,
-                                                            request.tol_rotation, family)
-        usable = reached & inside
-        score = scores(self.robot, C, request.q_ref, request.criterion, request.weights)
-        # The best usable branch; else the best that reaches the target (outside the limits);
-        # else the closest to it.
-        any_usable, any_reached = usable.any(axis=1), reached.any(axis=1)
-        pick = np.where(any_usable, np.argmin(np.where(usable, score, np.inf), axis=1),
-                        np.where(any_reached, np.argmin(np.where(reached, score, np.inf), axis=1),
-                                 np.argmin(np.where(real, pe + re, np.inf), axis=1)))
-        rows = np.arange(N)
-        has_real = real.any(axis=1)
-        state["q"] = np.where(has_real[:, None], C[rows, pick], request.q_ref)
-        state["errors"] = np.stack([pe[rows, pick], re[rows, pick]], axis=-1)
-        state["inside"] = inside[rows, pick]
-        state["reason"] = np.where(any_usable, OK,
-                                   np.where(any_reached, OUTSIDE_JOINT_LIMITS, OUT_OF_REACH)
-                                   ).astype(object)
+        C, errors, flags = analytic.candidates(self.robot.chain, family, request.T,
+                                               request.q_ref, request.mask,
+                                               request.tol_position, request.tol_rotation,
+                                               self._threads)
+        picked = self._pick(C, errors, flags, request.q_ref, request.criterion,
+                            request.weights)
+        rows, branch, found = np.arange(N), picked[:, 0], picked[:, 1]
+        any_usable = found == USABLE
+        has_real = flags[:, :, 0].any(axis=1)
+        state["q"] = np.where(has_real[:, None], C[rows, branch], request.q_ref)
+        state["errors"] = errors[rows, branch]
+        state["inside"] = flags[rows, branch, 2]
+        state["reason"] = np.array([OK, OUTSIDE_JOINT_LIMITS, OUT_OF_REACH],
+                                   dtype=object)[found]
         state["method"][:] = f"analytic:{family.name}"
         # What the closed form misses goes to the numeric solver, from the closest branch: at a
         # singularity (a wrist with axes 4 and 6 aligned) the solutions form a continuum, and
@@ -556,13 +597,28 @@ class IKSolver:
         state["polish"] = True
         return state
 
-    def _candidates(self, T, q_ref, mask, tol_position, tol_rotation, family):
-        """Every branch (N, K, n) folded into the limits near q_ref, with real (N, K), errors,
-        reached and inside (N, K) by forward kinematics (one kernel: `analytic.candidates`)."""
-        C, errors, flags = analytic.candidates(self.robot.chain, family, T, q_ref, mask,
-                                               tol_position, tol_rotation)
-        return (C, flags[..., 0], errors[..., 0], errors[..., 1], flags[..., 1],
-                flags[..., 2])
+    def _pick(self, C, errors, flags, q_ref, criterion, weights) -> NDArray:
+        """(N, 2) int: each target's chosen branch and what it is (`choose.pick`)."""
+        N = C.shape[0]
+        given = (scores(self.robot, C, q_ref, criterion, weights)
+                 if criterion == "manipulability" else _NO_SCORES)
+        out = np.empty((N, 2), dtype=np.int64)
+        pick.sized(N, C, errors, flags, np.ascontiguousarray(q_ref),
+                   CRITERION_CODES[criterion],
+                   _ONES[:self.robot.n] if weights is None else weights, self._bounds,
+                   given, out)
+        return out
+
+    @property
+    def _bounds(self) -> NDArray:
+        """(3, n): the velocity limits (1 where none), lower and upper limits, as `pick` takes
+        them (on first use)."""
+        if self._pick_bounds is None:
+            chain = self.robot.chain
+            v = chain.velocity_limits
+            object.__setattr__(self, "_pick_bounds", np.array(
+                [np.where(np.isfinite(v), v, 1.0), chain.lower, chain.upper]))
+        return self._pick_bounds
 
     def _poses(self, Q: NDArray) -> NDArray:
         """Tool poses (..., 4, 4) of Q (..., n) by the serial FK loop: checking candidates is
@@ -570,7 +626,7 @@ class IKSolver:
         flat = np.ascontiguousarray(Q.reshape(-1, self.robot.n))
         out = np.empty((flat.shape[0], 4, 4))
         k = self.robot.chain.kernel
-        core.poses.sized(flat.shape[0], flat, k.floats, k.ints, out,
+        core.poses.sized(flat.shape[0], flat, k.F, k.I, out,
                              few=core.LIGHT_CONFIGURATIONS)
         return out.reshape(Q.shape[:-1] + (4, 4))
 
@@ -692,7 +748,7 @@ class IKSolver:
         # the target and differ from every earlier valid one (a degenerate subproblem gives
         # one solution twice).
         C, errors, flags = analytic.candidates(self.robot.chain, family, flat, np.zeros((N, n)),
-                                               mask, tol_position, tol_rotation)
+                                               mask, tol_position, tol_rotation, self._threads)
         if lead == ():
             # `compress` on basic-indexed views: NumPy's mixed integer and array indexing
             # (C[0, rows]) costs several times as much for a handful of rows.
