@@ -66,6 +66,9 @@ def concatenate(motions: Sequence[Trajectory], label: str = "") -> Trajectory:
         offset += m.duration
     if not coefficients:
         return motions[0]
-    return Trajectory(np.concatenate(breaks), np.concatenate(coefficients),
-                      np.unique(np.concatenate(knots)),
+    breaks, coefficients = np.concatenate(breaks), np.concatenate(coefficients)
+    # A piece too short to move its end past the rounding of the time it starts at (a motion
+    # of 1e-50 s after 1 s) takes no time: it goes, and the continuity checked above holds.
+    kept = np.r_[True, np.diff(breaks) > 0]
+    return Trajectory(breaks[kept], coefficients[kept[1:]], np.unique(np.concatenate(knots)),
                       label or "+".join(m.label for m in motions))
