@@ -44,9 +44,9 @@ from pymodbus.client import ModbusTcpClient
 
 import yaml
 
-from armkit.drives import DriveClient, SimDrive, check_waypoints, load_register_map
-from armkit.drives import parse_register_map, send_waypoints
+from armkit.drives import DriveClient, SimDrive, check_waypoints, send_waypoints
 from armkit.errors import DriveError, InputError
+from armkit.io.register_maps import load_register_map, parse_register_map
 
 ROOT = Path(__file__).resolve().parents[1]
 MAP = ROOT / "examples" / "drives" / "inspection_6dof.map.yaml"

@@ -53,7 +53,7 @@ def main() -> None:
                 if kind == "warm cache":
                     for step, seconds in doc["timings_s"].items():
                         steps.setdefault(step, []).append(seconds)
-                    motion.append(doc["trajectory"]["duration_s"])
+                    motion.append(doc["motion"]["duration_s"])
                     error.append(doc["position_error"]["mm"])
                     resolution.append(doc["position_error"]["drive_resolution_m"] * 1e3)
     floor = Spread(tuple(motion))

@@ -30,12 +30,14 @@ _HOMES = {
     **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.io.robot_files"),
     "Robot": "armkit.model.robot",
     **dict.fromkeys(("Trajectory", "cubic", "quintic", "jerk_limited", "trapezoidal", "retime",
-                     "spline", "tool_motion", "RetimeResult"), "armkit.trajectory"),
+                     "retime_jerk", "spline", "tool_motion", "RetimeResult"),
+                    "armkit.trajectory"),
     **dict.fromkeys(("Section", "Workspace", "workspace"), "armkit.sampled_workspace"),
     **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
     "warm_up": "armkit.warmup",
-    **dict.fromkeys(("load_register_map", "check_waypoints", "send_waypoints", "DriveClient",
-                     "SimDrive"), "armkit.drives"),
+    **dict.fromkeys(("check_waypoints", "send_waypoints", "DriveClient", "SimDrive"),
+                    "armkit.drives"),
+    "load_register_map": "armkit.io.register_maps",
     **dict.fromkeys(("handeye", "HandEyeResult", "calibrate", "CalibrationResult",
                      "select_poses", "accuracy_report", "AccuracyReport", "CameraMount",
                      "points_to_base", "poses_to_base"), "armkit.calibration"),
@@ -47,17 +49,20 @@ _HOMES = {
                      "TorqueLimits"), "armkit.dynamics"),
     **dict.fromkeys(("reach_map", "ReachMap", "Orientations", "base_placement", "Placement"),
                     "armkit.reach"),
+    **dict.fromkeys(("load_task", "demo_task", "Task"), "armkit.io.tasks"),
+    **dict.fromkeys(("run_job", "JobResult"), "armkit.job"),
+    "show": "armkit.report.view",
 }
 
 if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.calibration import (AccuracyReport, CalibrationResult, CameraMount,
                                     HandEyeResult, accuracy_report, calibrate, handeye,
                                     points_to_base, poses_to_base, select_poses)
-    from armkit.drives import (DriveClient, SimDrive, check_waypoints, load_register_map,
-                               send_waypoints)
+    from armkit.drives import DriveClient, SimDrive, check_waypoints, send_waypoints
     from armkit.dynamics import (TorqueLimits, coriolis, coriolis_matrix, forward_dynamics,
                                  gravity_torques, inverse_dynamics, mass_matrix,
                                  torque_profile, with_payload)
+    from armkit.io.register_maps import load_register_map
     from armkit.io.camera import read_camera_mount
     from armkit.perception import TargetResult, detect_target
     from armkit.planning import PlanResult, Scene, plan
@@ -68,11 +73,14 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
                                             jacobian_dot, manipulability, min_singular_value,
                                             singular_values, tool_acceleration, tool_velocity)
     from armkit.io.robot_files import load_robot, robot, robots, save_robot
+    from armkit.io.tasks import Task, demo_task, load_task
+    from armkit.job import JobResult, run_job
+    from armkit.report.view import show
     from armkit.model.robot import Robot
     from armkit.sampled_workspace import Section, Workspace, workspace
     from armkit.threads import get_num_threads, set_num_threads
     from armkit.trajectory import (RetimeResult, Trajectory, cubic, jerk_limited, quintic,
-                                   retime, spline, tool_motion, trapezoidal)
+                                   retime, retime_jerk, spline, tool_motion, trapezoidal)
     from armkit.warmup import warm_up
 
 

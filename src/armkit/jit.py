@@ -359,8 +359,12 @@ class _Compiler:
             self._quick_switches()
             self.working = True
             try:
+                # The dispatcher first: making one takes numba's compiler lock inside
+                # _dispatcher_lock, so taking them the other way round could deadlock with a
+                # foreground call making the same dispatcher.
+                dispatcher = kernel.dispatcher
                 with _compiler_lock():
-                    kernel.dispatcher.compile(tuple(numba.typeof(a) for a in args))
+                    dispatcher.compile(tuple(numba.typeof(a) for a in args))
             except Exception:       # noqa: BLE001 (a batch call compiles it and says why)
                 kernel._broken = True
                 continue

@@ -15,7 +15,8 @@ import pytest
 from typer.testing import CliRunner
 
 from armkit.cli import app
-from armkit.drives import SimDrive, load_register_map
+from armkit.drives import SimDrive
+from armkit.io.register_maps import load_register_map
 from tests.drives.conftest import INSPECTION, WATER
 
 runner = CliRunner()

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 import yaml
 
-from armkit.drives import SimDrive, load_register_map, parse_register_map
+from armkit.drives import SimDrive
+from armkit.io.register_maps import load_register_map, parse_register_map
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples" / "drives"

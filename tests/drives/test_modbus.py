@@ -12,7 +12,7 @@ import pytest
 
 from armkit.drives import DriveClient, SimDrive, check_waypoints, send_waypoints
 from armkit.errors import DriveError, InputError
-from armkit.drives import load_register_map
+from armkit.io.register_maps import load_register_map
 from tests.drives.conftest import (INSPECTION, TIMEOUT, assert_report_true, drive_took,
                                    locked_map, waypoints)
 

@@ -12,9 +12,10 @@ from hypothesis import strategies as st
 from pymodbus.client import ModbusTcpClient
 
 import armkit
-from armkit.drives import JointRegister, load_register_map
-from armkit.drives.registers import MAX_WRITE, runs
+from armkit.drives import JointRegister
+from armkit.drives.registers import MAX_WRITE, default_register_map, runs
 from armkit.errors import ModelFileError
+from armkit.io.register_maps import builtin_register_map, load_register_map
 from tests.drives.conftest import INSPECTION, ROOT, WATER, waypoints
 
 
@@ -257,3 +258,38 @@ def test_alias_bombs_and_deep_nesting_are_refused(tmp_path, text, field, words):
         load_register_map(path)
     assert str(err.value).startswith(f"{path}: ") and words in str(err.value), str(err.value)
     assert err.value.field.startswith(field)
+
+
+@pytest.mark.parametrize("name", ["water_supply", "inspection_6dof", "panda", "ur5"])
+def test_half_a_count_is_what_a_register_round_trip_can_move(name):
+    """`RegisterMap.half_count` bounds how far a value moves when the drive stores it: for
+    any q within the limits, encoding and decoding moves each joint by at most that."""
+    robot = armkit.robot(name)
+    m = builtin_register_map(robot)
+    q = np.random.default_rng(3).uniform(robot.lower, robot.upper, (200, robot.n))
+    moved = np.abs(m.decode(m.encode(q)) - q)
+    bound = np.array([m.half_count(qi) for qi in q])
+    assert (moved <= bound * (1 + 1e-9) + 1e-15).all()
+    # ... and is reached (to within a tenth) by some value: it is not a loose bound.
+    assert (moved.max(axis=0) >= 0.1 * bound.max(axis=0)).all()
+
+
+def test_the_default_map_drives_any_robot_on_the_simulated_drive():
+    robot = armkit.robot("panda")
+    m = default_register_map(robot)
+    assert m.n == robot.n and m.moving_bit == 1 and m.block_count == 2 * robot.n + 1
+    q = waypoints(m, 3)
+    with armkit.SimDrive(m) as sim, armkit.DriveClient(m, port=sim.port, timeout=0.5) as drive:
+        assert drive.send(q).last_accepted == 2
+        status = drive.status()
+    assert status.moving in (True, False) and not status.faulted
+
+
+def test_a_moving_bit_is_a_state_bit_other_than_the_fault_bit(tmp_path):
+    assert "moving_bit: 1" in GOOD
+    for new, found in (("moving_bit: 15", "15, the fault bit"), ("moving_bit: 16", "16")):
+        path = tmp_path / "bad.map.yaml"
+        path.write_text(GOOD.replace("moving_bit: 1", new, 1))
+        with pytest.raises(ModelFileError, match=f"status.moving_bit: expected .*found {found}"):
+            load_register_map(path)
+    assert load_register_map(WATER).moving_bit == 1

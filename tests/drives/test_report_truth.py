@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from pyModbusTCP.client import ModbusClient
 
-from armkit.drives import DriveClient, SimDrive, load_register_map, send_waypoints
+from armkit.drives import DriveClient, SimDrive, send_waypoints
+from armkit.io.register_maps import load_register_map
 from armkit.errors import DriveError
 from tests.drives.conftest import INSPECTION, assert_report_true, drive_took, locked_map, waypoints
 from tests.drives.proxy import FaultProxy, get_register, registers, set_register

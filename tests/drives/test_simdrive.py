@@ -22,7 +22,8 @@ import pytest
 import yaml
 from pyModbusTCP.client import ModbusClient
 
-from armkit.drives import SimDrive, load_register_map
+from armkit.drives import SimDrive
+from armkit.io.register_maps import load_register_map
 from tests.drives.conftest import INSPECTION, WATER, locked_map
 
 TIMEOUT = 2.0   # s, every socket read in these tests
@@ -287,7 +288,7 @@ def float_map(**out_of_limits):
     doc["command"]["reset"] = 30
     if out_of_limits:
         doc["out_of_limits"] = out_of_limits
-    from armkit.drives import parse_register_map
+    from armkit.io.register_maps import parse_register_map
     return parse_register_map(doc, "float32 map")
 
 

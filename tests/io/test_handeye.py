@@ -123,7 +123,7 @@ def test_bad_poses_files(tmp_path):
     bad["robot"] = "water_supply"
     _fails(tmp_path, bad, r"poses\[2\]\.q: expected 4 joint values \(water_supply\), found 6")
     bad["robot"] = "no_such_robot"
-    _fails(tmp_path, bad, r"robot: expected a built-in robot or a robot file, found "
+    _fails(tmp_path, bad, r"robot: expected a built-in robot name or a robot file, found "
                           r"'no_such_robot'")
     bad = dict(good, pose=[])
     _fails(tmp_path, bad, r"top level: expected one of .*poses.*unknown field 'pose'")

@@ -25,14 +25,15 @@ def _write(tmp_path, text: str) -> Path:
 
 def test_the_demo_task_in_si(tmp_path):
     task = load_task(_write(tmp_path, DEMO))
-    assert task.robot.name == "water_supply" and task.waypoints == 10
+    assert task.robot.name == "water_supply" and task.motion.waypoints == 10
     np.testing.assert_allclose(task.T_base_camera[:3, 3], [0.6, -0.2, 2.2])
     np.testing.assert_allclose(task.start, [0.05, 0, np.deg2rad(30), np.deg2rad(-30)])
-    np.testing.assert_allclose((task.T_base_camera @ task.T_camera_target)[:3, 3],
+    np.testing.assert_allclose((task.T_base_camera @ task.target.T_camera_target)[:3, 3],
                                [1.0, 0.3, 0.8], atol=1e-12)
     (post,) = task.scene.obstacles
     assert isinstance(post, Cylinder) and post.radius == pytest.approx(0.05)
-    assert task.resolution == pytest.approx(0.005) and task.drive_host is None
+    assert task.planner.resolution == pytest.approx(0.005) and task.drive.host is None
+    assert task.drive.register_map.robot is task.robot          # the shipped water_supply map
 
 
 def test_units_in_metres_and_radians(tmp_path):
@@ -165,6 +166,7 @@ def test_mutated_task_files(tmp_path):
             assert "\n" not in str(err)
             outcomes["refused"] += 1
         else:
-            assert np.isfinite(task.T_base_camera).all() and np.isfinite(task.T_camera_target).all()
+            assert np.isfinite(task.T_base_camera).all()
+            assert np.isfinite(task.target.T_camera_target).all()
             outcomes["loaded"] += 1
     assert outcomes["refused"] > 50 and outcomes["loaded"] > 20

@@ -29,7 +29,7 @@ DEFAULT_PORT = 5020
 
 def _load_map(path: Path | None, robot: str | None):
     """The register map at `path`, or the built-in default (inspection_6dof)."""
-    from armkit.drives import load_register_map
+    from armkit.io.register_maps import load_register_map
 
     if robot is not None:
         robot_text("--robot", robot)

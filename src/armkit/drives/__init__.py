@@ -2,7 +2,8 @@
 leaves and never half-sends one, and a simulated drive that is a real Modbus TCP server.
 
 The names are loaded on first use (PEP 562). The file format lives in
-`armkit.io.register_maps`, which builds on this package; its loaders are named here too.
+`armkit.io.register_maps` (`load_register_map`, also `armkit.load_register_map`), which builds
+on this package; drives take the objects it makes and open no files.
 """
 
 from __future__ import annotations
@@ -14,17 +15,16 @@ from armkit.lazy import lazy_names
 _HOMES = {
     **dict.fromkeys(("DriveClient", "DriveStatus", "SendResult", "check_waypoints",
                      "send_waypoints"), "armkit.drives.modbus"),
-    **dict.fromkeys(("JointRegister", "RegisterMap"), "armkit.drives.registers"),
+    **dict.fromkeys(("JointRegister", "RegisterMap", "default_register_map"),
+                    "armkit.drives.registers"),
     **dict.fromkeys(("FAULTS", "SimDrive"), "armkit.drives.simdrive"),
-    **dict.fromkeys(("load_register_map", "parse_register_map"), "armkit.io.register_maps"),
 }
 
 if TYPE_CHECKING:
     from armkit.drives.modbus import (DriveClient, DriveStatus, SendResult, check_waypoints,
                                       send_waypoints)
-    from armkit.drives.registers import JointRegister, RegisterMap
+    from armkit.drives.registers import JointRegister, RegisterMap, default_register_map
     from armkit.drives.simdrive import FAULTS, SimDrive
-    from armkit.io.register_maps import load_register_map, parse_register_map
 
 __getattr__, __dir__ = lazy_names(__name__, _HOMES)
 

@@ -121,6 +121,8 @@ class DriveStatus:
         The state's fault bit is set, or the fault code is non-zero.
     lock : int or None
         The lock register (the owner's token, 0 when free), if the map has one.
+    moving : bool or None
+        The state's moving bit (`RegisterMap.moving_bit`); None without one.
     """
 
     q: NDArray
@@ -129,6 +131,7 @@ class DriveStatus:
     accepted: int | None
     faulted: bool
     lock: int | None = None
+    moving: bool | None = None
 
 
 def check_waypoints(register_map: RegisterMap, q: ArrayLike,
@@ -274,7 +277,8 @@ class DriveClient:
     Example
     -------
     >>> from importlib import resources
-    >>> from armkit.drives import SimDrive, load_register_map
+    >>> from armkit.drives import SimDrive
+    >>> from armkit.io.register_maps import load_register_map
     >>> drive_map = load_register_map(resources.files("armkit.drives") / "inspection_6dof.map.yaml")
     >>> q = np.deg2rad([[0, 0, 0, 0, 0, 0], [5, 5, 5, 5, 5, 5]])     # (N, n) in rad/m
     >>> with SimDrive(drive_map) as sim, DriveClient(drive_map, port=sim.port) as drive:
@@ -291,6 +295,7 @@ class DriveClient:
         self.timeout, self.retries, self.ack_timeout = timeout, int(retries), ack_timeout
         self._client = _TcpClient(host, port=self.port, timeout=timeout, retries=self.retries)
         self._index: int | None = None     # the drive's waypoint index last written or read
+        self._taken: int | None = None     # the last waypoint of this sequence acknowledged
         self._token: int | None = None     # this client's owner token, with a lock register
         self._locked = False               # whether this connection took the drive's lock
         self._unread = np.full(register_map.n, np.nan)      # positions not read
@@ -390,7 +395,7 @@ class DriveClient:
         try:
             values = self._read(runs(addresses, MAX_READ))
         except _Failed as failed:
-            raise DriveError(f"status read failed: {failed.cause}") from None
+            raise DriveError(f"status read failed: {failed.cause}", self._taken) from None
         q = np.full(m.n, np.nan)
         if all(j.actual is not None for j in m.joints):
             q_file = [float(j.value([values[a] for a in range(j.actual, j.actual + j.count)]))
@@ -405,7 +410,9 @@ class DriveClient:
         faulted = bool(state is not None and state >> m.fault_bit & 1) or bool(code)
         accepted = values.get(m.accepted) if m.accepted is not None else None
         lock = values.get(m.lock) if m.lock is not None else None
-        return DriveStatus(q, state, code, accepted, faulted, lock)
+        moving = (bool(state >> m.moving_bit & 1)
+                  if state is not None and m.moving_bit is not None else None)
+        return DriveStatus(q, state, code, accepted, faulted, lock, moving)
 
     # --- waypoints ---
 
@@ -480,7 +487,7 @@ class DriveClient:
                 raise _Failed(f"drive in fault before the first waypoint "
                               f"({self._fault_text(status)})", False)
             self._index = status.accepted or 0
-            self._singles = 0
+            self._singles, self._taken = 0, None
             if m.enable is not None:
                 self._request("write_register", m.enable, 1)
         except _Failed as failed:
@@ -541,7 +548,7 @@ class DriveClient:
             self._abandon()
             raise DriveError(failed.cause, k if failed.taken else last,
                              waypoint=k, outcome_unknown=failed.unknown) from None
-        self._index = index
+        self._index, self._taken = index, k
         return index
 
     def _acknowledge(self, index: int, block: list[int]) -> None:

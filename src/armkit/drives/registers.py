@@ -172,6 +172,9 @@ class RegisterMap:
         nothing, and fault with `limit_fault_code`.
     limit_fault_code : int
         The fault code of that fault, 1..65535.
+    moving_bit : int or None
+        Bit of `state` that the drive sets while it moves toward its target; None if it has
+        none (arrival is then told by the positions alone).
 
     Attributes
     ----------
@@ -197,6 +200,7 @@ class RegisterMap:
     reset: int | None = None
     limit_response: str = "exception"
     limit_fault_code: int = 0x8612
+    moving_bit: int | None = None
     block_start: int = field(init=False)
     block_count: int = field(init=False)
     ack_reads: tuple[tuple[int, int], ...] = field(init=False)
@@ -265,12 +269,34 @@ class RegisterMap:
                                                g.byte_order)
         return q_file
 
+    def half_count(self, q: ArrayLike) -> NDArray:
+        """Half of one count of each joint's register near q (n,), rad or m: how far a value
+        moves when the drive stores it (integers: 1 / scale; float32: its relative precision
+        2^-23 of the value, at least of 1 file unit)."""
+        q_file = np.abs(self.robot.q_from_si(joint_array(self.robot, q)))
+        count = np.array([max(v, 1.0) * 2.0 ** -23 if j.type == "float32" else 1.0 / j.scale
+                          for j, v in zip(self.joints, q_file)])
+        return 0.5 * self.robot.q_to_si(count)
+
     def joint_at(self, address: int) -> str:
         """What register `address` of the block holds, for messages: ``joint q3``."""
         for joint in self.joints:
             if joint.target <= address < joint.target + joint.count:
                 return f"joint {joint.name}"
         return "the waypoint index" if address == self.waypoint else "no field"
+
+
+def default_register_map(robot: Robot) -> RegisterMap:
+    """A register map for any robot, what the simulated drive holds when a task names none:
+    float32 targets from register 0 and the waypoint index after them (one write), actual
+    positions from register 200, then the accepted index, the state (bit 1: moving, bit 15:
+    fault) and the fault code."""
+    n = robot.n
+    joints = tuple(JointRegister(name, 2 * i, "float32", 1.0, actual=200 + 2 * i)
+                   for i, name in enumerate(robot.joint_names))
+    return RegisterMap(robot, joints, waypoint=2 * n, accepted=2 * n + 1, state=2 * n + 2,
+                       fault=2 * n + 3, source=f"<default register map of {robot.name}>",
+                       moving_bit=1)
 
 
 def runs(addresses, longest: int) -> tuple[tuple[int, int], ...]:

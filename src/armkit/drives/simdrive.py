@@ -3,7 +3,7 @@
 Each joint moves toward its target register at the robot's velocity limit, in real time (the
 position is brought up to date whenever a request arrives), and the status registers report
 it. A waypoint write (the whole block in one FC16 request) is taken by copying its index into
-``status.accepted``. State bits: 0 enabled, 1 moving, and the map's fault bit.
+``status.accepted``. State bits: 0 enabled, the map's moving bit and its fault bit.
 
 It answers as a Modbus TCP device does (Modbus Application Protocol V1.1b3 and the Messaging
 on TCP/IP Implementation Guide V1.0b):
@@ -45,7 +45,8 @@ corrupt     at waypoint write ``at``: store the first register of the block with
 ==========  =====================================================================================
 
 >>> from importlib import resources
->>> from armkit.drives import load_register_map, send_waypoints
+>>> from armkit.drives import send_waypoints
+>>> from armkit.io.register_maps import load_register_map
 >>> drive_map = load_register_map(resources.files("armkit.drives") / "inspection_6dof.map.yaml")
 >>> with SimDrive(drive_map) as sim:                               # port 0: a free port
 ...     send_waypoints(sim.map, np.zeros((1, 6)), port=sim.port).waypoints
@@ -71,7 +72,7 @@ from armkit.errors import DriveError, InputError
 from armkit.model.robot import joint_array
 
 FAULTS = ("refuse", "drop", "silence", "exception", "fault", "ignore", "corrupt")
-ENABLED_BIT, MOVING_BIT = 0, 1
+ENABLED_BIT = 0
 WRITES = (6, 16)   # function codes that write holding registers: single, multiple
 KEPT_REQUESTS = 100_000
 # Exception codes (Modbus Application Protocol V1.1b3, section 7).
@@ -333,8 +334,9 @@ class SimDrive:
         if m.state is not None:
             enabled = self._enabled(regs)
             moving = enabled and not self._fault_code and (self._target != self._position).any()
-            state = (enabled << ENABLED_BIT | bool(moving) << MOVING_BIT
-                     | bool(self._fault_code) << m.fault_bit)
+            state = enabled << ENABLED_BIT | bool(self._fault_code) << m.fault_bit
+            if m.moving_bit is not None:
+                state |= bool(moving) << m.moving_bit
             regs[m.state - self._first] = state
         if m.fault is not None:
             regs[m.fault - self._first] = self._fault_code

@@ -45,7 +45,7 @@ from armkit.calibration.handeye import HandEyeResult
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
 from armkit.kinematics.forward import fk
-from armkit.io.robot_files import robot as load_named_robot
+from armkit.io.robot_files import robot_named_in
 from armkit.model.robot import Units
 from armkit.spatial import invert, matrix_to_rpy, quat_to_matrix, rpy_to_matrix
 
@@ -158,12 +158,7 @@ def read_handeye_poses(path: str | Path) -> HandEyePoses:
         if spec.robot is None:
             raise ModelFileError(path, "robot", "a robot name or file (poses give joint values "
                                  "q)", "nothing")
-        try:
-            beside = Path(path).parent / spec.robot      # a robot file named beside this one
-            model = load_named_robot(str(beside) if beside.is_file() else spec.robot)
-        except InputError as err:
-            raise ModelFileError(path, "robot", "a built-in robot or a robot file",
-                                 f"{spec.robot!r} ({err})") from None
+        model = robot_named_in(path, spec.robot)
     G, C = [], []
     for i, pair in enumerate(spec.poses):
         if pair.q is not None:

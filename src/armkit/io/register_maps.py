@@ -19,6 +19,7 @@ is ``value in the robot file's units x scale``::
       accepted: 13                  # index of the last waypoint the drive took
       state: 14                     # bit field; bit `fault_bit` set means a fault
       fault_bit: 15
+      moving_bit: 1                 # set while the drive moves (optional)
       fault: 15                     # fault code, 0 for none
     out_of_limits:                  # how the drive refuses a target outside its joint limits,
       response: exception           # NaN or inf: exception (Modbus exception 3) | fault
@@ -34,16 +35,18 @@ the field.
 from __future__ import annotations
 
 import re
+from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
-from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap
-from armkit.errors import ArmkitError, ModelFileError
+from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap, default_register_map
+from armkit.errors import ModelFileError
 from armkit.io.documents import StrictModel, read_text, read_yaml, validated
-from armkit.model import Robot
 from armkit.io.robot_files import robot as load_robot_by_name
+from armkit.io.robot_files import robot_named_in
+from armkit.model import Robot
 
 DataType = Literal["int16", "uint16", "int32", "float32"]
 Order = Literal["big", "little"]
@@ -80,6 +83,7 @@ class StatusField(StrictModel):
     accepted: Address | None = None
     state: Address | None = None
     fault_bit: int = Field(15, ge=0, le=15, strict=True)
+    moving_bit: int | None = Field(None, ge=0, le=15, strict=True)
     fault: Address | None = None
 
 
@@ -136,6 +140,17 @@ def load_register_map(path: str | Path, robot: str | Path | Robot | None = None)
     return parse_register_map(document, str(path), robot)
 
 
+def builtin_register_map(robot: Robot) -> RegisterMap:
+    """The register map armkit ships for a built-in robot (water_supply, inspection_6dof),
+    else `armkit.drives.registers.default_register_map`: what the simulated drive holds when
+    a task names no map."""
+    shipped = resources.files("armkit.drives") / f"{robot.name}.map.yaml"
+    if shipped.is_file():
+        with resources.as_file(shipped) as path:
+            return load_register_map(path, robot)
+    return default_register_map(robot)
+
+
 def parse_register_map(document: Any, path: str = "<register map>",
                        robot: str | Path | Robot | None = None) -> RegisterMap:
     """A RegisterMap from a parsed register-map document; `path` names it in messages.
@@ -157,7 +172,7 @@ def parse_register_map(document: Any, path: str = "<register map>",
     return RegisterMap(model, joints, spec.device_id, command.waypoint, command.enable,
                        status.accepted, status.state, status.fault, status.fault_bit,
                        spec.readback, path, command.lock, command.reset, refusal.response,
-                       refusal.fault_code)
+                       refusal.fault_code, status.moving_bit)
 
 
 def _too_deep(text: str) -> int | None:
@@ -205,15 +220,7 @@ def _robot(spec: RegisterMapFile, path: str, given) -> Robot:
     if spec.robot is None:
         raise ModelFileError(path, "robot", "the robot the map drives (a built-in name or a "
                              "robot file)", "nothing")
-    try:
-        relative = Path(path).parent / spec.robot
-        return load_robot_by_name(relative if relative.is_file() else spec.robot)
-    except ModelFileError:
-        raise
-    except (ArmkitError, OSError, ValueError) as err:   # ValueError: a NUL in the name
-        found = spec.robot if len(spec.robot) <= 60 else spec.robot[:57] + "..."
-        raise ModelFileError(path, "robot", "a built-in robot name or a robot file",
-                             repr(found)) from err
+    return robot_named_in(path, spec.robot)
 
 
 def _joints(spec: RegisterMapFile, path: str, robot: Robot) -> tuple[JointRegister, ...]:
@@ -260,6 +267,12 @@ def _check_acknowledgement(spec: RegisterMapFile, path: str) -> None:
             and spec.status.fault is None):
         raise ModelFileError(path, "out_of_limits.response", "exception, since the map has no "
                              "status.state or status.fault to report a fault", "fault")
+    moving = spec.status.moving_bit
+    if moving is not None and (spec.status.state is None or moving == spec.status.fault_bit):
+        raise ModelFileError(path, "status.moving_bit", "a bit of status.state other than "
+                             "fault_bit", f"{moving}" + (" with no status.state"
+                                                         if spec.status.state is None else
+                                                         ", the fault bit"))
 
 
 def _check_addresses(spec: RegisterMapFile, joints: tuple[JointRegister, ...],
@@ -272,7 +285,7 @@ def _check_addresses(spec: RegisterMapFile, joints: tuple[JointRegister, ...],
             used.append((f"joints[{i}].actual", joint.actual, joint.actual + joint.count - 1))
     for group in ("command", "status"):
         for key, value in getattr(spec, group):
-            if value is not None and key != "fault_bit":
+            if value is not None and key not in ("fault_bit", "moving_bit"):
                 used.append((f"{group}.{key}", value, value))
     for name, first, last in used:
         if last > 65535:

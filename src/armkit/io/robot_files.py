@@ -33,7 +33,7 @@ from pydantic import Field, field_validator, model_validator
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import (Number, StrictModel, UnitsField, found_text, kind_of,
                                  read_yaml, validated)
-from armkit.model.chain import Chain, Limits
+from armkit.model.chain import JERK_PER_ACCELERATION, Chain, Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
 from armkit.model.inertia import Inertia, InertialModel, home_link_frames
@@ -86,6 +86,7 @@ class _JointField(StrictModel):
     viscous: Annotated[Number, Field(ge=0)] | None = None
     coulomb: Annotated[Number, Field(ge=0)] | None = None
     armature: Annotated[Number, Field(ge=0)] | None = None
+    jerk: Annotated[Number, Field(gt=0)] | None = None
 
     @field_validator("limits")
     @classmethod
@@ -128,7 +129,8 @@ class ScrewJointField(_JointField):
         return self
 
 
-JOINT_ONLY = ("limits", "velocity", "acceleration", "torque", "viscous", "coulomb", "armature")
+JOINT_ONLY = ("limits", "velocity", "acceleration", "jerk", "torque", "viscous", "coulomb",
+              "armature")
 """The fields of a moving joint that a fixed DH row may not have."""
 
 FRICTION_FIELDS = ("armature", "viscous", "coulomb")
@@ -390,7 +392,7 @@ def _check_magnitudes(spec: _RobotField, units: Units, path: str) -> None:
         revolute = joint.type == "revolute"
         to_si = units.angle_to_si if revolute else units.length_to_si
         unit, si_unit = (units.angle, "rad") if revolute else (units.length, "m")
-        for key, per in (("velocity", "/s"), ("acceleration", "/s^2")):
+        for key, per in (("velocity", "/s"), ("acceleration", "/s^2"), ("jerk", "/s^3")):
             value = getattr(joint, key)
             if value is not None:
                 check(f"{where}.{key}", value, f"a {key} limit", to_si, MAX_RATE,
@@ -438,7 +440,8 @@ def _limits(joint: _JointField, kind: str, units: Units) -> Limits | None:
     velocity, acceleration = (np.inf if v is None else float(to_si(v))
                               for v in (joint.velocity, joint.acceleration))
     torque = np.inf if joint.torque is None else float(joint.torque)
-    return Limits(lower, upper, velocity, acceleration, torque)
+    jerk = None if joint.jerk is None else float(to_si(joint.jerk))
+    return Limits(lower, upper, velocity, acceleration, jerk, torque)
 
 
 def _dh_row(joint: DHJointField, units: Units) -> DHRow:
@@ -513,6 +516,8 @@ def _limits_doc(limits: Limits | None, kind: str, units: Units) -> dict:
             doc[key] = _num(from_si(value))
     if np.isfinite(limits.torque):
         doc["torque"] = _num(limits.torque)
+    if np.isfinite(limits.jerk) and limits.jerk != JERK_PER_ACCELERATION * limits.acceleration:
+        doc["jerk"] = _num(from_si(limits.jerk))
     return doc
 
 
@@ -625,8 +630,20 @@ def robots() -> list[str]:
                   if p.name.endswith(".yaml"))
 
 
-def robot(name_or_path: str | Path | Robot) -> Robot:
+def robot(name_or_path: str | Path | Robot, folder: str | Path | None = None) -> Robot:
     """A robot from a built-in name, a YAML robot file or a URDF file.
+
+    The one rule for every name of a robot, given or inside a file (task, scene, register map,
+    hand-eye files): a built-in name (`robots`) is the built-in robot; anything else is a
+    file, relative to `folder` (the folder of the file that names it) unless absolute. A file
+    that happens to bear a built-in name is named with its folder (``./ur5``).
+
+    Parameters
+    ----------
+    name_or_path : str, Path or Robot
+        A Robot is returned as it is.
+    folder : str or Path, optional
+        Where a relative file name is taken from (default: the working directory).
 
     Example
     -------
@@ -646,14 +663,36 @@ def robot(name_or_path: str | Path | Robot) -> Robot:
     if text in robots():
         with resources.as_file(_builtin_dir() / f"{text}.yaml") as path:
             return load_robot(path)
+    path = Path(text) if folder is None else Path(folder) / text
     try:
-        is_file = Path(text).is_file()
+        is_file = path.is_file()
     except (OSError, ValueError) as err:       # too long for a file name, a NUL byte, ...
         raise InputError(f"robot: expected a built-in name or a robot file, found "
                          f"{found_text(text)} ({getattr(err, 'strerror', None) or err})") from None
     if is_file:
-        return load_robot(text)
-    hint = difflib.get_close_matches(text, robots(), n=1)
+        return load_robot(path)
     raise InputError(f"robot: expected a built-in name ({', '.join(robots())}) or a robot file, "
-                     f"found {found_text(text)}" + (f" (did you mean {hint[0]!r}?)" if hint
-                                                    else ""))
+                     f"found {found_text(text)}{_did_you_mean(text)}")
+
+
+def _did_you_mean(text: str) -> str:
+    hint = difflib.get_close_matches(text, robots(), n=1)
+    return f" (did you mean {hint[0]!r}?)" if hint else ""
+
+
+def robot_named_in(file: str | Path, name: str, field: str = "robot") -> Robot:
+    """The robot a file names in one of its fields, by `robot`'s rule, relative to that file.
+
+    Raises
+    ------
+    ModelFileError
+        Naming `file` and `field` when the name is neither built in nor a loadable file (an
+        invalid robot file raises its own ModelFileError, naming that file).
+    """
+    try:
+        return robot(name, Path(file).parent)
+    except ModelFileError:
+        raise
+    except InputError:
+        raise ModelFileError(str(file), field, "a built-in robot name or a robot file",
+                             found_text(name) + _did_you_mean(str(name))) from None

@@ -33,8 +33,9 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from armkit.errors import ArmkitError, ModelFileError
+from armkit.errors import ModelFileError
 from armkit.io.documents import StrictModel, UnitsField, read_text, read_yaml, validated
+from armkit.io.robot_files import robot_named_in
 from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
 from armkit.spatial import pose_from_xyz_rpy, quat_to_matrix
@@ -176,8 +177,6 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
         Naming the file and the field; a robot that does not load, joint lists of the wrong
         length, and a missing start or goal (with need_robot) included.
     """
-    import armkit
-
     path = str(path)
     document = read_yaml(path)
     if not isinstance(document, dict):
@@ -193,14 +192,7 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
     scene = Scene(obstacles)
     robot = None
     if spec.robot is not None:
-        local = Path(path).parent / spec.robot
-        try:
-            robot = armkit.robot(str(local) if local.is_file() else spec.robot)
-        except ModelFileError:
-            raise
-        except ArmkitError as err:
-            raise ModelFileError(path, "robot", "a built-in robot name or a robot file",
-                                 repr(spec.robot) + f" ({err})") from None
+        robot = robot_named_in(path, spec.robot)
     elif need_robot:
         raise ModelFileError(path, "robot", "a built-in robot name or a robot file", "nothing")
     settings = spec.planner.model_dump()

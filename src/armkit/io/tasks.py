@@ -1,4 +1,6 @@
-"""Task files: the end-to-end job of SPEC.md section 8 as one YAML file, in its declared units.
+"""Task files: the end-to-end job of SPEC.md section 8 as one YAML file, in its declared units,
+read into a `Task` (SI) made of one record per capability: what the job is asked to do.
+`armkit.job.run_job` does it; io never imports the job.
 
 ::
 
@@ -19,11 +21,14 @@
 ``camera`` may instead name a file: a camera-to-base file or a hand-eye result
 (`armkit.io.camera`); an eye-in-hand result also needs the joints the arm had when the camera
 measured (``camera: {file: handeye.yaml, q: [...]}``). ``target`` may instead be a point cloud of
-the inlet, found by `armkit.perception.detect_target` when the job runs::
+the inlet, read with the task and searched by `armkit.perception.detect_target` when the job
+runs::
 
     target: {cloud: scan.pcd, kind: pipe, radius: 40, mask: position}
 
-``mask`` names the IK task (default: the robot's own; ``position`` for a cloud).
+``mask`` names what inverse kinematics must match (default: the robot's own; ``position`` for
+a cloud). File names (robot, camera, cloud, scene, drive map, report) are relative to the task
+file's folder; a robot name follows `armkit.io.robot_files.robot`'s rule.
 
 Every mistake is one `ModelFileError`: file, field path, what was expected, what was found,
 with "did you mean" for a misspelled key.
@@ -31,21 +36,181 @@ with "did you mean" for a misspelled key.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
-from armkit.errors import ArmkitError, ModelFileError
+from armkit.calibration import camera_to_base
+from armkit.drives.registers import RegisterMap
+from armkit.errors import ModelFileError
+from armkit.io.camera import read_camera_mount
+from armkit.io.clouds import Cloud, read_cloud
 from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
-from armkit.io.scene import Obstacle
-from armkit.io.robot_files import MAX_LENGTH
-from armkit.model.robot import Units
+from armkit.io.register_maps import builtin_register_map, load_register_map
+from armkit.io.robot_files import MAX_LENGTH, robot_named_in
+from armkit.io.scene import Obstacle, obstacle_from_field, read_scene
+from armkit.kinematics.forward import fk
+from armkit.kinematics.ik.masks import NAMED_MASKS
+from armkit.model.chain import freeze
+from armkit.model.robot import Robot, Units
+from armkit.planning.scene import Scene
 from armkit.spatial import pose_from_xyz_rpy
 
 Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
 
+
+# --- what a task is ------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class PoseTarget:
+    """The target as the camera reports it.
+
+    Attributes
+    ----------
+    T_camera_target : ndarray, (4, 4)
+        m.
+    mask : str or None
+        What inverse kinematics must match (`armkit.kinematics.ik.masks.NAMED_MASKS`); None:
+        the robot's own.
+    """
+
+    T_camera_target: NDArray
+    mask: str | None = None
+
+    def __post_init__(self):
+        freeze(self, "T_camera_target")
+
+
+@dataclass(frozen=True, eq=False)
+class CloudTarget:
+    """The target to be found in a point cloud of the inlet (`armkit.perception.detect_target`).
+
+    Attributes
+    ----------
+    cloud : armkit.io.clouds.Cloud
+        Points in the sensor (camera) frame, m.
+    kind : {"pipe", "hole"}
+    radius : float or None
+        The inlet's radius (m), or None to fit it.
+    mask : str or None
+        What inverse kinematics must match; ``"position"`` by default (a cloud gives no yaw).
+    """
+
+    cloud: Cloud
+    kind: Literal["pipe", "hole"] = "pipe"
+    radius: float | None = None
+    mask: str | None = "position"
+
+
+@dataclass(frozen=True)
+class PlannerSettings:
+    """How the path is planned (`armkit.planning.plan`) and checked.
+
+    Attributes
+    ----------
+    name : {"rrtconnect", "rrt", "rrtstar"}
+    seed : int
+    time_limit : float
+        s.
+    max_iterations : int or None
+    resolution : float
+        m: the most any point of the arm moves between two checked states.
+    radius : float or None
+        m: the radius of the default link capsules when the robot file declares none.
+    """
+
+    name: str = "rrtconnect"
+    seed: int = 0
+    time_limit: float = 5.0
+    max_iterations: int | None = None
+    resolution: float = 0.005
+    radius: float | None = None
+
+
+@dataclass(frozen=True)
+class MotionSettings:
+    """The motion sent to the drive.
+
+    Attributes
+    ----------
+    waypoints : int
+        Waypoints sent (paper 1: 10).
+    speed : float
+        Fraction of the joint velocity, acceleration and jerk limits the motion may use, (0, 1].
+    """
+
+    waypoints: int = 10
+    speed: float = 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class DriveSettings:
+    """The drive the waypoints go to.
+
+    Attributes
+    ----------
+    register_map : armkit.drives.RegisterMap
+    host : str or None
+        None: the built-in simulated drive, on an ephemeral loopback port for the job's length.
+    port : int
+    timeout : float
+        s, per request.
+    arrival_timeout : float
+        s, the longest wait for the drive to report the last waypoint reached.
+    """
+
+    register_map: RegisterMap
+    host: str | None = None
+    port: int = 502
+    timeout: float = 1.0
+    arrival_timeout: float = 30.0
+
+
+@dataclass(frozen=True, eq=False)
+class Task:
+    """One job, SI: built by `load_task` from a task file, or in code.
+
+    Attributes
+    ----------
+    name : str
+    robot : Robot
+    units : Units
+        The task file's, for what the job prints and reports.
+    T_base_camera : ndarray, (4, 4)
+        The camera's (or sensor's) pose in the base frame, m.
+    target : PoseTarget or CloudTarget
+    drive : DriveSettings
+    start : ndarray (n,) or None
+        Where the simulated drive starts (a real drive reports where the arm is).
+    scene : armkit.planning.Scene
+    planner : PlannerSettings
+    motion : MotionSettings
+    report : Path or None
+        The report's folder.
+    """
+
+    name: str
+    robot: Robot
+    units: Units
+    T_base_camera: NDArray
+    target: PoseTarget | CloudTarget
+    drive: DriveSettings
+    start: NDArray | None = None
+    scene: Scene = field(default_factory=Scene)
+    planner: PlannerSettings = PlannerSettings()
+    motion: MotionSettings = MotionSettings()
+    report: Path | None = None
+
+    def __post_init__(self):
+        freeze(self, "T_base_camera", "start")
+
+
+# --- the file ------------------------------------------------------------------------------
 
 class CameraField(StrictModel):
     """The camera's pose in the base frame, or a file: a camera-to-base file or a hand-eye
@@ -110,7 +275,26 @@ class TaskFile(StrictModel):
     report: str | None = None
 
 
-def parse_task(document: Any, path: str | Path = "<task>"):
+def load_task(path: str | Path) -> Task:
+    """Read and validate a task file into a `Task` (SI).
+
+    Raises
+    ------
+    ModelFileError
+        Unreadable file, bad YAML, or any field that is wrong (file, field, expected, found),
+        in the task file or in a file it names (robot, camera, cloud, scene, register map).
+    """
+    return parse_task(read_yaml(path), path)
+
+
+def demo_task() -> Task:
+    """The built-in task of `armkit demo`: paper 1's water-supply arm, a camera over the track
+    that sees the inlet, and a post between the arm's rest pose and the inlet."""
+    with resources.as_file(resources.files("armkit") / "tasks" / "water_supply.task.yaml") as p:
+        return load_task(p)
+
+
+def parse_task(document: Any, path: str | Path = "<task>") -> Task:
     """A `Task` (SI) from a parsed task document; relative file names are taken from the
     task file's folder.
 
@@ -119,8 +303,6 @@ def parse_task(document: Any, path: str | Path = "<task>"):
     ModelFileError
         For any mistake: file, field, expected, found.
     """
-    from armkit.task import Task  # the job's own object; io only reads files into it
-
     where = str(path)
     if not isinstance(document, dict):
         raise ModelFileError(where, "top level", "a mapping of task fields",
@@ -131,90 +313,25 @@ def parse_task(document: Any, path: str | Path = "<task>"):
     if spec.camera is None:
         raise ModelFileError(where, "camera", "the camera's pose in the base frame "
                              "({xyz, rpy}) or a camera file ({file})", "nothing")
-    robot = _robot(spec.robot, folder, where)
-    T_base_camera = _camera(spec.camera, robot, units, folder, where)
-    target, cloud, mask = spec.target, None, _mask(spec.target.mask, where)
-    if target.cloud is not None:
-        if any(v is not None for v in (target.xyz, target.rpy, target.yaw)):
-            raise ModelFileError(where, "target", "a cloud or a pose (xyz, rpy or yaw), not "
-                                 "both", "both")
-        cloud = {"path": folder / target.cloud, "kind": target.kind,
-                 "radius": None if target.radius is None else float(
-                     units.length_to_si(target.radius)), "units": target.cloud_units}
-        T_camera_target = None
-        mask = mask or "position"
-    else:
-        if target.xyz is None:
-            raise ModelFileError(where, "target.xyz", "the target's position as the camera "
-                                 "sees it (or cloud: FILE)", "nothing")
-        if target.rpy is not None and target.yaw is not None:
-            raise ModelFileError(where, "target", "rpy or yaw, not both", "both")
-        rpy = target.rpy if target.rpy is not None else [0.0, 0.0, target.yaw or 0.0]
-        T_camera_target = _pose(target.xyz, rpy, units, where, "target")
-    start = None
-    if spec.start is not None:
-        if len(spec.start) != robot.n:
-            raise ModelFileError(where, "start", f"{robot.n} joint values for {robot.name}",
-                                 f"{len(spec.start)}")
-        start = _joint_si(spec.start, robot, units)
-        outside = (start < robot.lower - 1e-12) | (start > robot.upper + 1e-12)
-        if outside.any():
-            j = int(np.flatnonzero(outside)[0])
-            raise ModelFileError(where, f"start[{j}]", f"a value within {robot.joint_names[j]}'s "
-                                 "limits", f"{spec.start[j]:g}")
-    scene = _scene(spec.scene, units, folder, where)
+    robot = robot_named_in(where, spec.robot)
     p = spec.planner
-    drive = spec.drive
-    drive_map = None
-    if drive is not None and drive.map is not None:
-        drive_map = _register_map(folder / drive.map, robot, where)
-    elif drive is not None:
-        raise ModelFileError(where, "drive.map", "the drive's register map file", "nothing")
     return Task(
         name=spec.name or Path(where).stem, robot=robot, units=units,
-        T_base_camera=T_base_camera, T_camera_target=T_camera_target, target_cloud=cloud,
-        mask=mask, start=start, scene=scene, planner=p.name, seed=p.seed,
-        time_limit=p.time_limit, max_iterations=p.max_iterations,
-        resolution=None if p.resolution is None else float(units.length_to_si(p.resolution)),
-        radius=None if p.radius is None else float(units.length_to_si(p.radius)),
-        waypoints=spec.motion.waypoints, speed=spec.motion.speed,
-        drive_host=None if drive is None else drive.host,
-        drive_port=None if drive is None else drive.port,
-        drive_map=drive_map, drive_timeout=1.0 if drive is None else drive.timeout,
-        arrival_timeout=30.0 if drive is None else drive.arrival_timeout,
+        T_base_camera=_camera(spec.camera, robot, units, folder, where),
+        target=_target(spec.target, units, folder, where),
+        drive=_drive(spec.drive, robot, folder, where),
+        start=None if spec.start is None else _start(spec.start, robot, units, where),
+        scene=_scene(spec.scene, units, folder), planner=PlannerSettings(
+            p.name, p.seed, p.time_limit, p.max_iterations,
+            0.005 if p.resolution is None else float(units.length_to_si(p.resolution)),
+            None if p.radius is None else float(units.length_to_si(p.radius))),
+        motion=MotionSettings(spec.motion.waypoints, spec.motion.speed),
         report=None if spec.report is None else folder / spec.report)
 
 
-def load_task(path: str | Path):
-    """Read and validate a task file into a `Task` (SI).
-
-    Raises
-    ------
-    ModelFileError
-        Unreadable file, bad YAML, or any field that is wrong (file, field, expected, found).
-    """
-    return parse_task(read_yaml(path), path)
-
-
-def _robot(name: str, folder: Path, where: str):
-    from armkit.io.robot_files import robot, robots
-
-    try:
-        if name in robots():
-            return robot(name)
-        return robot(folder / name)
-    except ModelFileError:
-        raise
-    except ArmkitError as err:
-        raise ModelFileError(where, "robot", "a built-in robot name or a robot file",
-                             f"{name!r} ({err})") from None
-
-
-def _camera(spec: CameraField, robot, units: Units, folder: Path, where: str) -> np.ndarray:
+def _camera(spec: CameraField, robot: Robot, units: Units, folder: Path,
+            where: str) -> NDArray:
     """T_base_camera from a pose, or from a camera file (a fixed mount or a hand-eye result)."""
-    from armkit.calibration import camera_to_base
-    from armkit.io.camera import read_camera_mount
-
     if (spec.xyz is None) == (spec.file is None):
         raise ModelFileError(where, "camera", "a pose (xyz, rpy) or a file, one of them",
                              "both" if spec.file else "neither")
@@ -233,49 +350,68 @@ def _camera(spec: CameraField, robot, units: Units, folder: Path, where: str) ->
         raise ModelFileError(where, "camera.q", f"the {robot.n} joint values the arm had when "
                              "the camera (on its gripper) measured", "none" if spec.q is None
                              else f"{len(spec.q)}")
-    from armkit.kinematics import fk
     return camera_to_base(mount, fk(robot, _joint_si(spec.q, robot, units)))
 
 
-def _mask(name: str | None, where: str) -> str | None:
-    from armkit.kinematics.ik.masks import NAMED_MASKS
-
-    if name is not None and name not in NAMED_MASKS:
+def _target(target: TargetField, units: Units, folder: Path,
+            where: str) -> PoseTarget | CloudTarget:
+    mask = target.mask
+    if mask is not None and mask not in NAMED_MASKS:
         raise ModelFileError(where, "target.mask", f"one of {', '.join(NAMED_MASKS)}",
-                             repr(name))
-    return name
+                             repr(mask))
+    if target.cloud is not None:
+        if any(v is not None for v in (target.xyz, target.rpy, target.yaw)):
+            raise ModelFileError(where, "target", "a cloud or a pose (xyz, rpy or yaw), not "
+                                 "both", "both")
+        radius = None if target.radius is None else float(units.length_to_si(target.radius))
+        return CloudTarget(read_cloud(folder / target.cloud, target.cloud_units), target.kind,
+                           radius, mask or "position")
+    if target.xyz is None:
+        raise ModelFileError(where, "target.xyz", "the target's position as the camera sees "
+                             "it (or cloud: FILE)", "nothing")
+    if target.rpy is not None and target.yaw is not None:
+        raise ModelFileError(where, "target", "rpy or yaw, not both", "both")
+    rpy = target.rpy if target.rpy is not None else [0.0, 0.0, target.yaw or 0.0]
+    return PoseTarget(_pose(target.xyz, rpy, units, where, "target"), mask)
 
 
-def _joint_si(values: list[float], robot, units: Units) -> np.ndarray:
+def _start(values: list[float], robot: Robot, units: Units, where: str) -> NDArray:
+    if len(values) != robot.n:
+        raise ModelFileError(where, "start", f"{robot.n} joint values for {robot.name}",
+                             f"{len(values)}")
+    start = _joint_si(values, robot, units)
+    outside = (start < robot.lower - 1e-12) | (start > robot.upper + 1e-12)
+    if outside.any():
+        j = int(np.flatnonzero(outside)[0])
+        raise ModelFileError(where, f"start[{j}]", f"a value within {robot.joint_names[j]}'s "
+                             "limits", f"{values[j]:g}")
+    return start
+
+
+def _drive(spec: DriveField | None, robot: Robot, folder: Path, where: str) -> DriveSettings:
+    if spec is None:
+        return DriveSettings(builtin_register_map(robot))
+    if spec.map is None:
+        raise ModelFileError(where, "drive.map", "the drive's register map file", "nothing")
+    return DriveSettings(load_register_map(folder / spec.map, robot), spec.host, spec.port,
+                         spec.timeout, spec.arrival_timeout)
+
+
+def _joint_si(values: list[float], robot: Robot, units: Units) -> NDArray:
     q = np.asarray(values, dtype=float)
-    revolute = np.asarray(robot.chain.revolute)
-    return np.where(revolute, units.angle_to_si(q), units.length_to_si(q))
+    return np.where(robot.chain.revolute, units.angle_to_si(q), units.length_to_si(q))
 
 
-def _length(x, units: Units, where: str, field: str):
-    v = units.length_to_si(x)
-    if np.any(np.abs(v) > MAX_LENGTH):
-        raise ModelFileError(where, field, f"lengths within {MAX_LENGTH:g} m",
-                             f"{np.max(np.abs(v)):g} m")
-    return v
+def _pose(xyz, rpy, units: Units, where: str, name: str) -> NDArray:
+    p = units.length_to_si(xyz)
+    if np.any(np.abs(p) > MAX_LENGTH):
+        raise ModelFileError(where, f"{name}.xyz", f"lengths within {MAX_LENGTH:g} m",
+                             f"{np.max(np.abs(p)):g} m")
+    return pose_from_xyz_rpy(p, units.angle_to_si(rpy))
 
 
-def _pose(xyz, rpy, units: Units, where: str, field: str) -> np.ndarray:
-    return pose_from_xyz_rpy(_length(xyz, units, where, f"{field}.xyz"),
-                             units.angle_to_si(rpy))
-
-
-def _scene(spec, units: Units, folder: Path, where: str):
-    from armkit.io.scene import obstacle_from_field, read_scene
-    from armkit.planning import Scene
-
+def _scene(spec: SceneField | None, units: Units, folder: Path) -> Scene:
     if spec is None:
         return Scene()
     inline = Scene(tuple(obstacle_from_field(o, units) for o in spec.obstacles))
     return inline if spec.file is None else read_scene(folder / spec.file) + inline
-
-
-def _register_map(path: Path, robot, where: str):
-    from armkit.drives import load_register_map
-
-    return load_register_map(path, robot)

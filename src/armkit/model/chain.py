@@ -45,26 +45,36 @@ def freeze(record, *names: str) -> None:
             object.__setattr__(record, name, frozen_array(value))
 
 
+JERK_PER_ACCELERATION = 10.0
+"""1/s: a joint without a jerk limit of its own gets this many times its acceleration limit,
+so that it reaches full acceleration from rest in 0.1 s."""
+
+
 @dataclass(frozen=True)
 class Limits:
     """Limits of one joint, SI: position (rad or m), velocity (/s), acceleration (/s^2),
-    torque (N m, or N for a prismatic joint).
+    jerk (/s^3), torque (N m, or N for a prismatic joint).
 
-    Velocity, acceleration and torque are ``inf`` where none is given.
+    Velocity, acceleration and torque are ``inf`` where none is given; jerk, where none is
+    given, is `JERK_PER_ACCELERATION` times the acceleration limit.
     """
 
     lower: float
     upper: float
     velocity: float = np.inf
     acceleration: float = np.inf
+    jerk: float | None = None
     torque: float = np.inf
 
     def __post_init__(self):
         if not self.lower < self.upper:
             raise InputError(f"limits: expected lower < upper, found {self.lower} and {self.upper}")
-        if not (self.velocity > 0 and self.acceleration > 0):
-            raise InputError(f"limits: expected positive velocity and acceleration limits, "
-                             f"found {self.velocity} and {self.acceleration}")
+        if self.jerk is None:
+            object.__setattr__(self, "jerk", JERK_PER_ACCELERATION * self.acceleration)
+        if not (self.velocity > 0 and self.acceleration > 0 and self.jerk > 0):
+            raise InputError(f"limits: expected positive velocity, acceleration and jerk "
+                             f"limits, found {self.velocity}, {self.acceleration} and "
+                             f"{self.jerk}")
         if not self.torque > 0:
             raise InputError(f"limits: expected a positive torque limit, found {self.torque}")
 
@@ -172,8 +182,9 @@ class Chain:
         off the chain where its first mimic joint is.
     lower, upper : ndarray, shape (n,)
         Position limits (rad or m); a leader's are narrowed to keep its followers in theirs.
-    velocity_limits, acceleration_limits : ndarray, shape (n,)
-        Per joint (/s, /s^2); inf where none is given; narrowed for leaders as the positions.
+    velocity_limits, acceleration_limits, jerk_limits : ndarray, shape (n,)
+        Per joint (/s, /s^2, /s^3); inf where none is given (jerk: see `Limits`); narrowed
+        for leaders as the positions.
     torque_limits : ndarray, shape (n,)
         Per joint value (N m, N); inf where none is given; a leader's own.
     revolute : ndarray of bool, shape (n,)
@@ -200,6 +211,7 @@ class Chain:
     upper: NDArray = field(init=False, repr=False)
     velocity_limits: NDArray = field(init=False, repr=False)
     acceleration_limits: NDArray = field(init=False, repr=False)
+    jerk_limits: NDArray = field(init=False, repr=False)
     torque_limits: NDArray = field(init=False, repr=False)
     revolute: NDArray = field(init=False, repr=False)
     coupling: NDArray = field(init=False, repr=False)
@@ -236,6 +248,7 @@ class Chain:
         set_("upper", frozen_array([x.upper for x in limits]))
         set_("velocity_limits", frozen_array([x.velocity for x in limits]))
         set_("acceleration_limits", frozen_array([x.acceleration for x in limits]))
+        set_("jerk_limits", frozen_array([x.jerk for x in limits]))
         set_("torque_limits", frozen_array([x.torque for x in limits]))
         revolute = np.array([j.kind == "revolute" for j in variables])
         revolute.setflags(write=False)
@@ -394,7 +407,7 @@ def leader_limits(limits: Limits, couplings) -> Limits | None:
     Limits, or None if no leader value keeps every mimic joint within its limits.
     """
     lower, upper = limits.lower, limits.upper
-    velocity, acceleration = limits.velocity, limits.acceleration
+    velocity, acceleration, jerk = limits.velocity, limits.acceleration, limits.jerk
     for m, b, own in couplings:
         if m == 0.0:
             if not own.lower <= b <= own.upper:
@@ -404,7 +417,9 @@ def leader_limits(limits: Limits, couplings) -> Limits | None:
         lower, upper = max(lower, ends[0]), min(upper, ends[1])
         velocity = min(velocity, own.velocity / abs(m))
         acceleration = min(acceleration, own.acceleration / abs(m))
-    return Limits(lower, upper, velocity, acceleration, limits.torque) if lower < upper else None
+        jerk = min(jerk, own.jerk / abs(m))
+    return (Limits(lower, upper, velocity, acceleration, jerk, limits.torque) if lower < upper
+            else None)
 
 
 @dataclass(frozen=True, eq=False)

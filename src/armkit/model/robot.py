@@ -135,6 +135,12 @@ class Robot:
         return self.chain.acceleration_limits
 
     @property
+    def jerk_limits(self) -> NDArray:
+        """Jerk limits (n,), rad/s^3 or m/s^3: the robot file's, else 10 times the
+        acceleration limits (`armkit.model.chain.JERK_PER_ACCELERATION`)."""
+        return self.chain.jerk_limits
+
+    @property
     def torque_limits(self) -> NDArray:
         """Torque limits (n,), N m or N; inf where the robot's file gives none."""
         return self.chain.torque_limits

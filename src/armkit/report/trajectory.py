@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from armkit.errors import InputError
 from armkit.model.robot import Robot
+from armkit.report.text import figure_text
 from armkit.trajectory.piecewise import Trajectory
 from armkit.trajectory.tool import ToolMotion
 
@@ -28,8 +29,8 @@ COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:
 
 
 def joint_label(robot: Robot, j: int) -> str:
-    """``joint 2 (pitch1)``: 1-based number and name."""
-    return f"joint {j + 1} ({robot.joint_names[j]})"
+    """``joint 2 (pitch1)``: 1-based number and name, as a figure draws it literally."""
+    return f"joint {j + 1} ({figure_text(robot.joint_names[j])})"
 
 
 def joint_unit(robot: Robot, j: int) -> str:
@@ -109,7 +110,7 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
             _knot_lines(ax, tr.knots)
             ax.grid(alpha=0.3)
             if row == 0 and len(trajectories) > 1:
-                ax.set_title(name)
+                ax.set_title(figure_text(name))
             if col == 0:
                 ax.set_ylabel(f"{QUANTITIES[row]} ({_units(robot, joints, row)})")
             if row == rows - 1:
@@ -119,22 +120,23 @@ def patterns_figure(robot: Robot, trajectories: Mapping[str, Trajectory],
         title = f"{robot.name}: " + ", ".join(trajectories)
     elif len(trajectories) == 1:        # one column, untitled: its name in the one title
         title += f" ({next(iter(trajectories))})"
-    fig.suptitle(title, fontsize=12)
+    fig.suptitle(figure_text(title), fontsize=12)
     return fig
 
 
-def _limits(robot: Robot, vmax: NDArray | None, amax: NDArray | None) -> list[NDArray]:
+def _limits(robot: Robot, vmax: NDArray | None, amax: NDArray | None,
+            jmax: NDArray | None = None) -> list[NDArray]:
     """Per quantity (position, velocity, acceleration, jerk) the limits in file units, as
-    (n, 2) lower/upper rows; NaN where there is none."""
+    (n, 2) lower/upper rows; NaN where there is none. Jerk limits are drawn only when given."""
     v = robot.chain.velocity_limits if vmax is None else np.asarray(vmax, dtype=float)
     a = robot.chain.acceleration_limits if amax is None else np.asarray(amax, dtype=float)
+    j = np.full(robot.n, np.nan) if jmax is None else np.asarray(jmax, dtype=float)
     scale = robot.q_from_si(np.ones(robot.n))
     position = np.column_stack([robot.q_from_si(robot.lower), robot.q_from_si(robot.upper)])
     out = [position]
-    for limit in (v, a):
+    for limit in (v, a, j):
         limit = np.where(np.isfinite(limit), limit * scale, np.nan)
         out.append(np.column_stack([-limit, limit]))
-    out.append(np.full((robot.n, 2), np.nan))
     return [np.where(np.isfinite(x), x, np.nan) for x in out]
 
 
@@ -187,16 +189,16 @@ def _legend(fig: Figure, ax, limits_drawn: bool) -> None:
 
 def motion_figure(robot: Robot, tr: Trajectory, joints: Sequence[int] | None = None, *,
                   count: int = 600, title: str | None = None, vmax: NDArray | None = None,
-                  amax: NDArray | None = None) -> Figure:
+                  amax: NDArray | None = None, jmax: NDArray | None = None) -> Figure:
     """Position, velocity, acceleration and jerk (columns) of each chosen joint (rows).
 
     Each panel's y axis names the quantity and its unit; the joint's position limits and its
-    velocity and acceleration limits (`vmax`, `amax`, SI; default the robot's) are dashed
-    lines where the curve comes near them.
+    velocity, acceleration and jerk limits (`vmax`, `amax` SI, default the robot's; `jmax` SI,
+    drawn only when given) are dashed lines where the curve comes near them.
     """
     joints = _joints(robot, joints, tr)
     t, values = _in_file_units(robot, tr, count)
-    limits = _limits(robot, vmax, amax)
+    limits = _limits(robot, vmax, amax, jmax)
     fig = Figure(figsize=(15, 2.1 * len(joints) + 1.2), layout="constrained")
     axes = fig.subplots(len(joints), len(QUANTITIES), sharex=True, squeeze=False)
     for row, j in enumerate(joints):
@@ -215,9 +217,8 @@ def motion_figure(robot: Robot, tr: Trajectory, joints: Sequence[int] | None = N
                 ax.legend(loc="best", fontsize=7)
             if row == len(joints) - 1:
                 ax.set_xlabel("t (s)")
-    fig.suptitle(title or f"{robot.name}: {tr.label}, {tr.duration:.4g} s (dashed: the limits a "
-                 f"curve comes near)",
-                 fontsize=12)
+    fig.suptitle(figure_text(title or f"{robot.name}: {tr.label}, {tr.duration:.4g} s (dashed: "
+                             f"the limits a curve comes near)"), fontsize=12)
     return fig
 
 
@@ -249,7 +250,7 @@ def tool_figure(robot: Robot, motions: Mapping[str, ToolMotion], *,
             if col == 0:
                 ax.set_ylabel(f"tool {labels[row]} ({unit}{SUFFIX[row]})")
             if len(motions) > 1 and row == 0:
-                ax.set_title(name)
+                ax.set_title(figure_text(name))
             ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
                       borderaxespad=0.0) if col == len(motions) - 1 else None
         if yaw:
@@ -266,6 +267,7 @@ def tool_figure(robot: Robot, motions: Mapping[str, ToolMotion], *,
             ax.grid(alpha=0.3)
         axes[-1, col].set_xlabel("t (s)")
     only = next(iter(motions)) if len(motions) == 1 else None
-    fig.suptitle(title or (f"{robot.name}: tool motion ({only}), base frame" if only else
-                           f"{robot.name}: tool motion, base frame"), fontsize=12)
+    fig.suptitle(figure_text(title or (f"{robot.name}: tool motion ({only}), base frame" if only
+                                       else f"{robot.name}: tool motion, base frame")),
+                 fontsize=12)
     return fig

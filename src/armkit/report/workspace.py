@@ -16,6 +16,7 @@ from matplotlib.patches import Circle, Rectangle
 from matplotlib.ticker import MaxNLocator
 
 from armkit.model.robot import Units
+from armkit.report.text import figure_text
 from armkit.sampled_workspace import Workspace
 
 _POINT = {"s": 0.6, "alpha": 0.35, "linewidths": 0, "color": "tab:blue", "rasterized": True}
@@ -75,8 +76,8 @@ def workspace_figure(ws: Workspace, units: Units | None = None) -> Figure:
             Line2D([], [], marker="+", ls="", color=_BASE["color"], ms=8, label="base origin"),
             Line2D([], [], label="reach from the z axis" if k == 1 else "reach", **_REACH)],
             loc="upper right", fontsize=7)
-    fig.suptitle(f"{ws.robot.name}: workspace of the tool origin, {ws.samples:,} samples "
-                 f"(showing {len(p):,})")
+    fig.suptitle(f"{figure_text(ws.robot.name)}: workspace of the tool origin, "
+                 f"{ws.samples:,} samples (showing {len(p):,})")
     return fig
 
 
@@ -144,7 +145,7 @@ def section_figure(ws: Workspace, height: float | None = None, azimuth: float = 
         ax.legend(loc="upper right", fontsize=8)
         ax.set_title(f"{where}\noccupied area {area:.4g} {unit}\u00b2")
     voxel = units.length_from_si(ws.resolution)
-    fig.suptitle(f"{ws.robot.name}: workspace sections, {voxel:.6g} {unit} cells, "
+    fig.suptitle(f"{figure_text(ws.robot.name)}: workspace sections, {voxel:.6g} {unit} cells, "
                  f"{ws.samples:,} samples")
     return fig
 

@@ -5,6 +5,8 @@
   all joints synchronised; `*_profile` for batches of problems;
 - `spline`, `patterns`: through via points with a degree per segment (3-3-3, 4-5-5, 5-5-5...);
 - `retime`: the time-optimal motion along a path within velocity and acceleration limits;
+- `retime_jerk`: a motion along a path within velocity, acceleration and jerk limits, its
+  acceleration continuous (no steps);
 - `stats`, `compare`, `knot_jumps`, `squared_jerk`: peaks, steps at knots, effort;
 - `tool_motion`: the tool's path, velocity and acceleration along a joint trajectory;
 - `cartesian_line`: straight-line tool motion through inverse kinematics, stopping with its
@@ -32,6 +34,7 @@ _HOMES = {
     **dict.fromkeys(("Profile", "jerk_limited", "jerk_limited_profile", "profile_trajectory",
                      "trapezoidal", "trapezoidal_profile"), "armkit.trajectory.profiles"),
     **dict.fromkeys(("retime", "waypoint_path", "RetimeResult"), "armkit.trajectory.retiming"),
+    "retime_jerk": "armkit.trajectory.jerk_retiming",
     **dict.fromkeys(("PAPER_PATTERNS", "patterns", "spline"), "armkit.trajectory.splines"),
     **dict.fromkeys(("ToolMotion", "tool_motion"), "armkit.trajectory.tool"),
 }
@@ -45,6 +48,7 @@ if TYPE_CHECKING:
     from armkit.trajectory.profiles import (Profile, jerk_limited, jerk_limited_profile,
                                             profile_trajectory, trapezoidal,
                                             trapezoidal_profile)
+    from armkit.trajectory.jerk_retiming import retime_jerk
     from armkit.trajectory.retiming import RetimeResult, retime, waypoint_path
     from armkit.trajectory.splines import PAPER_PATTERNS, patterns, spline
     from armkit.trajectory.tool import ToolMotion, tool_motion
