@@ -56,7 +56,4 @@ def test_a_planned_path_passes_the_dense_check(checker, planner):
     assert not checker.edge_valid(start, goal)[0]          # the straight line hits the ball
     result = plan(checker, start, goal, planner=planner, seed=2)
     assert result.success, result.reason
-    obstacle_gap, self_gap, _ = reference.dense_gaps(checker.robot, checker.geometry,
-                                                     checker.scene, result.path, step=0.002,
-                                                     points=60)
-    assert obstacle_gap >= checker.resolution / 2 and self_gap >= checker.resolution
+    assert reference.dense_ok(checker, result.path)

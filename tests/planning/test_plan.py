@@ -33,13 +33,6 @@ def shelf_checker():
     return CollisionChecker(robot, shelf(), default_geometry(robot, 0.04), RESOLUTION)
 
 
-def dense_ok(checker, path):
-    """Independent check every 0.002 rad: at least half the resolution from every obstacle,
-    the resolution between capsules (what certification promises)."""
-    obstacle_gap, self_gap, _ = reference.dense_gaps(checker.robot, checker.geometry,
-                                                     checker.scene, path, step=0.002, points=60)
-    return obstacle_gap >= checker.resolution / 2 - 1e-12 and \
-        self_gap >= checker.resolution - 1e-12
 
 
 @pytest.mark.parametrize("planner", PLANNERS)
@@ -54,7 +47,7 @@ def test_shelf_paths_pass_the_dense_check(shelf_checker, planner):
     assert result.length <= result.raw_length + 1e-9
     assert 0 < result.planning_time <= result.total_time
     assert shelf_checker.path_valid(result.path)
-    assert dense_ok(shelf_checker, result.path)
+    assert reference.dense_ok(shelf_checker, result.path)
     # Waypoints evenly spaced by arc length along the returned path.
     steps = np.linalg.norm(np.diff(result.path, axis=0), axis=1)
     assert np.ptp(steps) < 1e-9 or len(result.path) > 10 or \
@@ -76,8 +69,8 @@ def test_random_scenes(seed):
             break
     result = plan(checker, start, goal, seed=seed, time_limit=30)
     assert result.success, result.reason
-    assert dense_ok(checker, result.path)
-    assert dense_ok(checker, result.raw_path)
+    assert reference.dense_ok(checker, result.path)
+    assert reference.dense_ok(checker, result.raw_path)
 
 
 def test_same_seed_same_path(shelf_checker):
@@ -115,9 +108,9 @@ def test_enclosed_goal_ends_within_budget(planner):
 
     validity = ValidityFunction(outside_ring, [0, 0], [1, 1], resolution=0.005)
     result = plan(validity, [0.05, 0.05], [0.5, 0.5], planner=planner, max_iterations=300,
-                  seed=0)
+                  seed=0, time_limit=np.inf)
     assert not result.success
-    assert result.reason.startswith("no path within the budget (300 iterations")
+    assert result.reason.startswith("no path within the iteration budget (300 iterations")
     assert result.iterations == 300
 
 
@@ -144,7 +137,7 @@ def test_user_validity_function_with_every_planner(planner):
 
 
 def test_direct_edge_first():
-    result = plan("ur5", np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
+    result = plan(armkit.robot("ur5"), np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
     assert result.success and result.iterations == 0 and len(result.raw_path) == 2
 
 
@@ -155,7 +148,7 @@ def test_goal_pose_every_collision_free_ik_solution_is_a_goal(shelf_checker):
     assert result.success, result.reason
     assert len(result.goals) >= 1 and shelf_checker.valid(result.goals).all()
     np.testing.assert_allclose(armkit.fk(robot, result.path[-1]), T, atol=1e-9)
-    assert dense_ok(shelf_checker, result.path)
+    assert reference.dense_ok(shelf_checker, result.path)
 
 
 def test_several_goals():
@@ -215,6 +208,15 @@ def test_plan_bad_input(shelf_checker):
         plan(lambda Q: np.ones(len(Q), bool), [0, 0], [1, 1])
     with pytest.raises(InputError, match="robot: expected"):
         plan(42, [0, 0], [1, 1])
+    with pytest.raises(InputError, match="robot: expected a Robot.*found str"):
+        plan("ur5", np.zeros(6), np.ones(6))        # names are loaded by armkit.robot
+    for field, value in (("time_limit", -1.0), ("time_limit", float("nan")), ("step", 0.0),
+                         ("goal_bias", 2.0), ("max_iterations", 1.5), ("waypoints", 1),
+                         ("seed", 0.5), ("shortcut_tries", -1), ("resolution", "x")):
+        with pytest.raises(InputError, match=f"{field}: expected"):
+            plan(shelf_checker, SHELF_START, SHELF_GOAL, **{field: value})
+    with pytest.raises(TypeError):
+        plan(shelf_checker, SHELF_START, SHELF_GOAL, colour="red")
     with pytest.raises(InputError, match="goal_pose"):
         plan(lambda Q: np.ones(len(Q), bool), [0, 0], goal_pose=np.eye(4),
              limits=([0, 0], [1, 1]))

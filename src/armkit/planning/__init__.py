@@ -16,15 +16,16 @@ The shelf of the benchmark: from the lower compartment to the upper one, around 
 (True, (10, 6))
 """
 
-from armkit.planning.collision import CollisionChecker, displacement_weights
+from armkit.planning.collision import CollisionChecker, CollisionModel, displacement_weights
 from armkit.planning.geometry import (ArmGeometry, arm_geometry, default_geometry,
                                       primitive_capsule, urdf_geometry)
-from armkit.planning.plan import PlanResult, goals_from_pose, plan
+from armkit.planning.plan import PlanResult, PlanSettings, goals_from_pose, plan
+from armkit.planning.planners import PLANNERS
 from armkit.planning.rrt import ValidityFunction
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
 from armkit.planning.smooth import path_length, resample, resample_keeping_vertices, shortcut
 
 __all__ = ["Scene", "Box", "Sphere", "Cylinder", "Capsule", "ArmGeometry", "arm_geometry",
-           "default_geometry", "CollisionChecker", "displacement_weights", "ValidityFunction",
-           "PlanResult", "plan", "goals_from_pose", "shortcut", "resample",
+           "default_geometry", "CollisionChecker", "CollisionModel", "displacement_weights",
+           "ValidityFunction", "PlanResult", "PlanSettings", "PLANNERS", "plan", "goals_from_pose", "shortcut", "resample",
            "resample_keeping_vertices", "path_length", "urdf_geometry", "primitive_capsule"]

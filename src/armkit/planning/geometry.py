@@ -22,6 +22,7 @@ notes say so.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,26 +39,36 @@ DEFAULT_RADIUS = 0.04       # m, the default capsules' radius when the robot fil
 
 @dataclass(frozen=True, eq=False)
 class ArmGeometry:
-    """Capsules on the links of one robot (SI).
+    """Spheres and capsules on the links of one robot (SI): the parts of the arm.
 
     Attributes
     ----------
     link : ndarray of int, (m,)
-        The link each capsule is fixed to: 0 base, i after joint i (n the last link).
+        The link each part is fixed to: 0 base, i after joint i (n the last link).
     a, b : ndarray, (m, 3)
-        The capsule's segment in its link's frame, m.
+        The part's segment in its link's frame, m (a sphere: a == b).
     radius : ndarray, (m,)
         m.
     skip : tuple of (int, int)
-        Link pairs never tested against each other (adjacent links are never tested).
+        Link pairs never tested against each other.
     source : str
         Where the geometry comes from ("robot file", "URDF collision primitives", or the
         default).
     labels : tuple of str
-        Where each capsule comes from, e.g. ``URDF panda_link1[0] cylinder`` (the link's
-        first <collision>); empty, or one per capsule.
+        Where each part comes from, e.g. ``URDF panda_link1[0] cylinder`` (the link's
+        first <collision>); empty, or one per part.
     notes : tuple of str
         What was left out or replaced (mesh collisions, links off the chain).
+    names : tuple of str
+        The body each part belongs to, by name (a URDF link's name; ``link k`` when the
+        robot has no names); empty, or one per part. SRDF pairs are given by these names.
+    disabled : tuple of (str, str)
+        Body pairs never tested (an SRDF's ``disable_collisions``, or a robot file's skip by
+        name).
+    adjacent : bool
+        Whether parts on adjacent links are tested. False (armkit's rule without an SRDF):
+        never. True when an SRDF says which pairs are off (MoveIt's rule: every pair it does
+        not disable is tested).
     """
 
     link: NDArray
@@ -68,34 +79,69 @@ class ArmGeometry:
     source: str = ""
     labels: tuple[str, ...] = ()
     notes: tuple[str, ...] = ()
+    names: tuple[str, ...] = ()
+    disabled: tuple[tuple[str, str], ...] = ()
+    adjacent: bool = False
 
     def __post_init__(self):
         link = frozen_array(self.link, np.int64).reshape(-1)
         m = link.shape[0]
         a, b = frozen_array(self.a).reshape(m, 3), frozen_array(self.b).reshape(m, 3)
         radius = frozen_array(self.radius).reshape(m)
-        if not (np.isfinite(a).all() and np.isfinite(b).all() and np.all(radius > 0)):
+        if not (np.isfinite(a).all() and np.isfinite(b).all() and np.all(radius > 0)
+                and np.all(np.isfinite(radius))):
             raise InputError("arm geometry: expected finite points and positive radii, "
                              "found otherwise")
+        if m and link.min() < 0:
+            raise InputError(f"arm geometry: expected links from 0, found {link.min()}")
         skip = tuple(sorted({(min(int(i), int(j)), max(int(i), int(j))) for i, j in self.skip}))
         labels, notes = tuple(str(x) for x in self.labels), tuple(str(x) for x in self.notes)
-        if labels and len(labels) != m:
-            raise InputError(f"arm geometry labels: expected one per capsule ({m}), "
-                             f"found {len(labels)}")
+        names = tuple(str(x) for x in self.names) or tuple(f"link {k}" for k in link)
+        for what, values in (("labels", labels), ("names", names)):
+            if values and len(values) != m:
+                raise InputError(f"arm geometry {what}: expected one per part ({m}), "
+                                 f"found {len(values)}")
+        disabled = tuple(sorted({tuple(sorted((str(i), str(j)))) for i, j in self.disabled}))
         for name, v in (("link", link), ("a", a), ("b", b), ("radius", radius), ("skip", skip),
-                        ("labels", labels), ("notes", notes)):
+                        ("labels", labels), ("notes", notes), ("names", names),
+                        ("disabled", disabled), ("adjacent", bool(self.adjacent))):
             object.__setattr__(self, name, v)
 
     def __len__(self) -> int:
         return self.link.shape[0]
 
     def self_pairs(self) -> NDArray:
-        """Capsule index pairs (p, 2) tested for self-collision: links not adjacent, not skipped."""
-        skip = set(self.skip)
-        pairs = [(i, j) for i in range(len(self)) for j in range(i + 1, len(self))
-                 if abs(self.link[i] - self.link[j]) > 1
-                 and (min(self.link[i], self.link[j]), max(self.link[i], self.link[j])) not in skip]
-        return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+        """Part index pairs (p, 2), i < j, tested for self-collision: on different links (parts
+        of one link never move apart), not adjacent links unless `adjacent`, not a skipped link
+        pair, not a disabled body pair."""
+        m = len(self)
+        i, j = np.triu_indices(m, 1)
+        li, lj = self.link[i], self.link[j]
+        keep = li != lj
+        if not self.adjacent:
+            keep &= np.abs(li - lj) > 1
+        if self.skip:
+            lo, hi = np.minimum(li, lj), np.maximum(li, lj)
+            skip = np.array(self.skip, dtype=np.int64)
+            keep &= ~np.isin(lo * (self.link.max() + 1) + hi,
+                             skip[:, 0] * (self.link.max() + 1) + skip[:, 1])
+        if self.disabled:
+            bodies = sorted(set(self.names))
+            index = {name: k for k, name in enumerate(bodies)}
+            body = np.array([index[name] for name in self.names], dtype=np.int64)
+            off = np.zeros((len(bodies), len(bodies)), bool)
+            for x, y in self.disabled:
+                if x in index and y in index:
+                    off[index[x], index[y]] = off[index[y], index[x]] = True
+            keep &= ~off[body[i], body[j]]
+        return np.column_stack([i[keep], j[keep]]).astype(np.int64).reshape(-1, 2)
+
+    def with_disabled(self, pairs, adjacent: bool = True) -> ArmGeometry:
+        """The same parts with body pairs (names) never tested, as an SRDF's
+        ``disable_collisions`` gives them; `adjacent`: test the pairs of adjacent links that
+        are not disabled (MoveIt's rule, the default)."""
+        return dataclasses.replace(self, disabled=tuple(self.disabled) + tuple(
+            (str(x), str(y)) for x, y in pairs), adjacent=adjacent)
 
 
 def link_to_body(robot: Robot) -> NDArray:
@@ -141,31 +187,50 @@ def default_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
     return _skip_touching(robot, geometry)
 
 
+def segment_distances(a: NDArray, b: NDArray, c: NDArray, e: NDArray) -> NDArray:
+    """Distances (m) between the segments a-b and c-e, each (..., 3), vectorised (Ericson,
+    Real-Time Collision Detection 5.1.9; a segment may be a point); (...,)."""
+    d1, d2, r = b - a, e - c, a - c
+    A, E = np.einsum("...i,...i", d1, d1), np.einsum("...i,...i", d2, d2)
+    Fv, C, Bd = (np.einsum("...i,...i", d2, r), np.einsum("...i,...i", d1, r),
+                 np.einsum("...i,...i", d1, d2))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = A * E - Bd * Bd
+        s = np.where(den > 1e-14 * A * E, np.clip((Bd * Fv - C * E) / den, 0, 1), 0.0)
+        t = np.where(E > 1e-300, (Bd * s + Fv) / E, 0.0)
+        s = np.where(t < 0, np.clip(-C / A, 0, 1), np.where(t > 1, np.clip((Bd - C) / A, 0, 1),
+                                                                 s))
+        s = np.where(A > 1e-300, s, 0.0)
+        t = np.where(E > 1e-300, np.clip(t, 0, 1), 0.0)
+        # A point against a segment: its projection.
+        t = np.where((A <= 1e-300) & (E > 1e-300), np.clip(Fv / E, 0, 1), t)
+    return np.linalg.norm(a + d1 * s[..., None] - c - d2 * t[..., None], axis=-1)
+
+
+def part_segments(robot: Robot, geometry: ArmGeometry, Q: NDArray) -> tuple[NDArray, NDArray]:
+    """The parts' world segments at the states Q (S, n): a, b, each (S, m, 3)."""
+    F = fk_frames(robot, Q)[:, geometry.link]                   # (S, m, 4, 4)
+    A = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.a) + F[..., :3, 3]
+    B = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.b) + F[..., :3, 3]
+    return A, B
+
+
 def _skip_touching(robot: Robot, geometry: ArmGeometry, samples: int = 200) -> ArmGeometry:
-    """Skip the capsule pairs that touch in most configurations (SRDF's "always" reason):
-    neighbours across a short wrist link, which these capsules could never hold apart."""
+    """Skip the link pairs whose parts touch in most configurations (SRDF's "always" reason):
+    neighbours across a short wrist link, which default capsules could never hold apart."""
     pairs = geometry.self_pairs()
     if not len(pairs):
         return geometry
     lo, hi = robot.chain.sampling_limits
     Q = np.random.default_rng(0).uniform(lo, hi, (samples, robot.n))
-    F = fk_frames(robot, Q)[:, geometry.link]                   # (S, m, 4, 4)
-    A = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.a) + F[..., :3, 3]
-    B = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.b) + F[..., :3, 3]
-    extra = []
-    for i, j in pairs:
-        # Sampled segment distance (a fine polyline), enough to tell "mostly touching".
-        t = np.linspace(0, 1, 9)[:, None, None]
-        P = A[None, :, i] + t * (B - A)[None, :, i]
-        R = A[None, :, j] + t * (B - A)[None, :, j]
-        d = np.linalg.norm(P[:, None] - R[None], axis=-1).min(axis=(0, 1))
-        if np.mean(d <= geometry.radius[i] + geometry.radius[j]) > 0.5:
-            extra.append((int(geometry.link[i]), int(geometry.link[j])))
+    A, B = part_segments(robot, geometry, Q)
+    i, j = pairs[:, 0], pairs[:, 1]
+    d = segment_distances(A[:, i], B[:, i], A[:, j], B[:, j])             # (S, p)
+    touching = np.mean(d <= geometry.radius[i] + geometry.radius[j], axis=0) > 0.5
+    extra = {(int(geometry.link[x]), int(geometry.link[y])) for x, y in pairs[touching]}
     if not extra:
         return geometry
-    return ArmGeometry(geometry.link, geometry.a, geometry.b, geometry.radius,
-                       geometry.skip + tuple(extra), geometry.source, geometry.labels,
-                       geometry.notes)
+    return dataclasses.replace(geometry, skip=geometry.skip + tuple(sorted(extra)))
 
 
 def primitive_capsule(kind: str, size: NDArray) -> tuple[NDArray, NDArray, float]:
