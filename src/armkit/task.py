@@ -418,7 +418,8 @@ def _one_after_another(pieces):
 
 def _certified(trajectory, checker) -> bool:
     """Every state of the motion clear of the scene: samples close enough that no point of the
-    arm moves more than half the resolution between two, each sample clear by the resolution."""
+    arm moves more than half the resolution between two, each sample clear by a quarter of it
+    (two neighbours' clearances then exceed the motion between them)."""
     from armkit.trajectory.piecewise import peak
 
     speed = float(checker.weights @ peak(trajectory, 1))    # m/s: no arm point moves faster
@@ -427,7 +428,7 @@ def _certified(trajectory, checker) -> bool:
     dt = 0.5 * checker.resolution / (speed * 1.05)
     count = int(min(max(math.ceil(trajectory.duration / dt) + 1, 2), 2_000_000))
     q = trajectory.evaluate(np.linspace(0.0, trajectory.duration, count))
-    return bool(checker.valid(q).all())
+    return bool((checker.clearance(q) > 0.25 * checker.resolution).all())
 
 
 @dataclass

@@ -1,23 +1,33 @@
-"""The arm as capsules: declared in the robot file, from a URDF's collision primitives, or
-derived from its joint origins.
+"""The arm as spheres and capsules: declared in the robot file, from a URDF's collision elements
+(its meshes covered by spheres), or derived from its joint origins; and which pairs of them are
+tested against each other.
 
-Each capsule (a sphere when its two points coincide) sits on one link: link 0 is the base frame,
-link i the frame after joint i (``armkit.fk_frames``), the last one the tool frame; its points
-are given in that link's frame. Without a declaration the arm is one capsule per moving joint,
-from the joint's origin (its frame's origin, on its axis) to the next joint's origin (the tool's
-origin for the last), with a stated radius; for a DH table these are the segments between
-consecutive DH frame origins. Self-collision is tested between capsules on links that are not
-adjacent, except for the pairs skipped (like an SRDF's disable_collisions).
+Each part (a capsule, or a sphere when its two points coincide) sits on one link: link 0 is the
+base frame, link i the frame after joint i (``armkit.fk_frames``), the last one the tool frame;
+its points are given in that link's frame, and it is named by its body (a URDF link's name,
+else ``link k``). Without a declaration the arm is one capsule per moving joint, from the
+joint's origin (its frame's origin, on its axis) to the next joint's origin (the tool's origin
+for the last), with a stated radius; for a DH table these are the segments between consecutive
+DH frame origins.
+
+Which pairs are tested: never two parts of one link (they never move apart). Without an SRDF,
+parts on links that are not adjacent, except the link pairs skipped (by number or name) and
+those that touch in most sampled configurations. With an SRDF (`ArmGeometry.with_disabled`,
+a robot file's ``srdf:``), MoveIt's rule: every pair of bodies it does not disable, adjacent
+or not. `disabled_pairs` finds such a list the way MoveIt's Setup Assistant does (pairs never
+in collision over many random configurations, pairs always or by default in collision,
+adjacent links), for `armkit.io.srdf.write_srdf` to keep.
 
 Precedence (`arm_geometry`): the robot file's own ``collision:`` section (its shapes, or the
-default capsules of its radius), then a URDF's ``<collision>`` primitives, then the default
+default capsules of its radius), then a URDF's ``<collision>`` elements, then the default
 capsules. A URDF's primitives become capsules that contain them, so that the arm's geometry
 always holds the URDF's: a sphere stays a sphere, a cylinder becomes the capsule of its axis and
 radius, a box the capsule along its longest edge whose radius is half the diagonal of the other
-two (the box's cross-section fits in the capsule's disc, its length in the segment). Links that
-hang on a moving link through fixed joints are merged into it. Meshes are not read: an arm link
-whose URDF links have only mesh collisions gets its default capsule instead, and the geometry's
-notes say so.
+two (the box's cross-section fits in the capsule's disc, its length in the segment); a mesh
+whose file was read becomes spheres that hold every vertex (`armkit.planning.spheres`). Links
+that hang on a moving link through fixed joints are merged into it (their parts keep their own
+names). An arm link whose URDF links have only unread meshes (no trimesh, or the file not
+found) gets its default capsule instead, and the geometry's notes say so.
 """
 
 from __future__ import annotations
@@ -33,6 +43,8 @@ from armkit.kinematics.forward import fk_frames
 from armkit.model.chain import frozen_array
 from armkit.model.robot import Robot
 from armkit.model.urdf import URDFTable
+from armkit.planning.spheres import TOLERANCE as MESH_TOLERANCE
+from armkit.planning.spheres import spheres_from_mesh
 
 DEFAULT_RADIUS = 0.04       # m, the default capsules' radius when the robot file gives none
 
@@ -233,6 +245,79 @@ def _skip_touching(robot: Robot, geometry: ArmGeometry, samples: int = 200) -> A
     return dataclasses.replace(geometry, skip=geometry.skip + tuple(sorted(extra)))
 
 
+def disabled_pairs(robot: Robot, geometry: ArmGeometry, samples: int = 10_000, seed: int = 0,
+                   always: float = 0.95, chunk: int = 500) -> tuple[tuple[str, str, str], ...]:
+    """The body pairs a collision check can leave out, found as MoveIt's Setup Assistant finds
+    them: ``(body a, body b, reason)``, reason one of
+
+    - "Adjacent": the bodies are on the same link or on links joined by a joint;
+    - "Default": they overlap at the default configuration (0, within the limits);
+    - "Always": they overlap in at least `always` of `samples` random configurations;
+    - "Never": they overlap in none of them.
+
+    Pairs that never overlap in the samples may still meet in a configuration not sampled
+    (MoveIt takes the same risk; more samples, less of it). The list is meant to be found
+    once and kept (`armkit.io.srdf.write_srdf`, or a robot file's ``srdf:``).
+
+    Parameters
+    ----------
+    samples : int
+        Random configurations, uniform within the joint limits (seeded).
+    always : float
+        The share of samples in which a pair overlaps for "Always".
+    chunk : int
+        Configurations per vectorised step (memory: about 100 bytes per part pair each).
+
+    Returns
+    -------
+    tuple of (str, str, str)
+        Sorted by body names.
+    """
+    bodies = sorted(set(geometry.names))
+    index = {name: k for k, name in enumerate(bodies)}
+    body = np.array([index[name] for name in geometry.names], dtype=np.int64)
+    link_of = {}
+    for name, link in zip(geometry.names, geometry.link):
+        link_of[name] = min(link_of.get(name, link), int(link))
+    i, j = np.triu_indices(len(geometry), 1)
+    keep = body[i] != body[j]
+    i, j = i[keep], j[keep]
+    key = np.minimum(body[i], body[j]) * len(bodies) + np.maximum(body[i], body[j])
+    pair_keys, inverse = np.unique(key, return_inverse=True)
+    reach = geometry.radius[i] + geometry.radius[j]
+
+    def overlaps(Q):
+        """(S, body pairs) bool: some parts of the two bodies overlap."""
+        A, B = part_segments(robot, geometry, Q)
+        d = segment_distances(A[:, i], B[:, i], A[:, j], B[:, j]) < reach      # (S, part pairs)
+        hit = np.zeros((len(Q), len(pair_keys)), bool)
+        np.logical_or.at(hit.T, inverse, d.T)
+        return hit
+
+    lo, hi = robot.chain.sampling_limits
+    default = overlaps(np.clip(np.zeros(robot.n), lo, hi)[None])[0]
+    rng = np.random.default_rng(seed)
+    count = np.zeros(len(pair_keys), np.int64)
+    for start in range(0, samples, chunk):
+        Q = rng.uniform(lo, hi, (min(chunk, samples - start), robot.n))
+        count += overlaps(Q).sum(axis=0)
+    out = []
+    for k, pair in enumerate(pair_keys):
+        a, b = bodies[pair // len(bodies)], bodies[pair % len(bodies)]
+        if abs(link_of[a] - link_of[b]) <= 1:
+            reason = "Adjacent"
+        elif default[k]:
+            reason = "Default"
+        elif count[k] >= always * samples:
+            reason = "Always"
+        elif count[k] == 0:
+            reason = "Never"
+        else:
+            continue
+        out.append((a, b, reason))
+    return tuple(out)
+
+
 def primitive_capsule(kind: str, size: NDArray) -> tuple[NDArray, NDArray, float]:
     """The capsule (a, b (3,) in the primitive's frame, radius, m) that contains a URDF
     collision primitive: a sphere itself; a cylinder (radius, length; axis z) the capsule of
@@ -252,79 +337,125 @@ def primitive_capsule(kind: str, size: NDArray) -> tuple[NDArray, NDArray, float
     raise InputError(f"collision primitive: expected box, cylinder or sphere, found {kind!r}")
 
 
+def chain_link_names(robot: Robot) -> list[str]:
+    """The name of each link 0 .. n: a URDF's link names (the root, then the child of each
+    moving joint), else ``link k``."""
+    table = robot.table
+    n = robot.chain.n_joints
+    if not isinstance(table, URDFTable) or not table.joints:
+        return [f"link {k}" for k in range(n + 1)]
+    names = [table.joints[0].parent] + [j.child for j in table.joints if j.kind != "fixed"]
+    return names[:n + 1] + [f"link {k}" for k in range(len(names), n + 1)]
+
+
 def urdf_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
-                  skip: tuple[tuple[int, int], ...] = ()) -> ArmGeometry | None:
-    """Capsules containing the <collision> primitives of a URDF robot; None if it has none.
+                  skip: tuple[tuple[int, int], ...] = (), tolerance: float = MESH_TOLERANCE
+                  ) -> ArmGeometry | None:
+    """The parts of a URDF robot's <collision> elements; None if it has none it can use.
 
     Each box, cylinder and sphere on a link rigidly attached to the chain becomes the capsule
-    that contains it (`primitive_capsule`) on the arm link it hangs on. An arm link with a URDF
-    link whose collisions are all meshes also gets its default capsule (`default_geometry`, of
-    `radius` m): meshes are not read. Link pairs are skipped as for the default capsules
-    (adjacent links, `skip`, and pairs touching in most sampled configurations).
+    that contains it (`primitive_capsule`; a sphere stays a sphere) on the arm link it hangs
+    on; each mesh whose vertices were read (`armkit.io.urdf`) becomes the spheres that cover
+    it within `tolerance` m (`armkit.planning.spheres.spheres_from_mesh`). An arm link with a
+    URDF link whose collisions are all unread meshes gets its default capsule
+    (`default_geometry`, of `radius` m), and the notes say why. Each part is named by its URDF
+    link. Link pairs are skipped as for the default capsules (adjacent links, `skip`, and
+    pairs touching in most sampled configurations).
     """
     table = robot.table
-    if not isinstance(table, URDFTable) or all(c.kind == "mesh" for c in table.collisions):
+    if not isinstance(table, URDFTable):
         return None
     # From the URDF frame of chain link k to armkit's link frame k: the same frame, except
     # for the last link, whose armkit frame is the tool (chain.T_tool past the child link).
     to_tool = np.linalg.inv(robot.chain.T_tool)
-    links, A, B, radii, labels = [], [], [], [], []
+    links, A, B, radii, labels, names = [], [], [], [], [], []
     by_link: dict[str, list] = {}
+    unread: dict[str, str] = {}
+    meshes = 0
     for c in table.collisions:
         by_link.setdefault(c.link, []).append(c)
+        T = (to_tool if c.chain_link == robot.chain.n_joints else np.eye(4)) @ c.T
         if c.kind == "mesh":
+            if c.vertices is None:
+                unread[f"{c.link} <collision>[{c.index}]"] = c.note
+                continue
+            centres, r = spheres_from_mesh(c.vertices, c.faces, tolerance)
+            centres = centres @ T[:3, :3].T + T[:3, 3]
+            meshes += 1
+            for k, (p, rk) in enumerate(zip(centres, r)):
+                links.append(c.chain_link), A.append(p), B.append(p), radii.append(rk)
+                labels.append(f"URDF {c.link}[{c.index}] mesh sphere {k}")
+                names.append(c.link)
             continue
         a, b, r = primitive_capsule(c.kind, c.size)
-        T = (to_tool if c.chain_link == robot.chain.n_joints else np.eye(4)) @ c.T
         links.append(c.chain_link)
         A.append(T[:3, :3] @ a + T[:3, 3])
         B.append(T[:3, :3] @ b + T[:3, 3])
         radii.append(r)
         labels.append(f"URDF {c.link}[{c.index}] {c.kind}")
+        names.append(c.link)
+    if not links:
+        return None
     notes = []
-    mesh_links = [name for name, found in by_link.items() if all(c.kind == "mesh" for c in found)]
-    mesh_only = sorted({by_link[name][0].chain_link for name in mesh_links})
-    if mesh_links:
-        notes.append(f"mesh collisions not read (links {', '.join(mesh_links)}): default "
-                     f"capsules of radius {radius * 1e3:g} mm on arm links "
-                     f"{', '.join(map(str, mesh_only))}")
+    unread_links = [name for name, found in by_link.items()
+                    if all(f"{c.link} <collision>[{c.index}]" in unread for c in found)]
+    unread_only = sorted({by_link[name][0].chain_link for name in unread_links})
+    reasons = sorted(set(unread.values()))
+    if unread_links:
+        notes.append(f"mesh collisions not read (links {', '.join(unread_links)}: "
+                     f"{'; '.join(reasons)}): default capsules of radius {radius * 1e3:g} mm on "
+                     f"arm links {', '.join(map(str, unread_only))}")
         default = default_geometry(robot, radius)
-        for k in np.flatnonzero(np.isin(default.link, mesh_only)):
+        link_names = chain_link_names(robot)
+        for k in np.flatnonzero(np.isin(default.link, unread_only)):
             links.append(int(default.link[k]))
             A.append(default.a[k])
             B.append(default.b[k])
             radii.append(float(default.radius[k]))
             labels.append(default.labels[k])
-    beside = [f"{c.link} <collision>[{c.index}]" for c in table.collisions
-              if c.kind == "mesh" and c.link not in mesh_links]
+            names.append(link_names[int(default.link[k])])
+    beside = [where for where in unread if where.split(" <")[0] not in unread_links]
     if beside:
-        notes.append(f"mesh collisions not read beside primitives: {', '.join(beside)}")
+        notes.append(f"mesh collisions not read beside other elements: {', '.join(beside)}")
+    if meshes:
+        notes.append(f"{meshes} meshes covered by spheres within {tolerance * 1e3:g} mm")
     if table.detached:
         notes.append("links moved by joints off the chain are not part of the arm: "
                      + ", ".join(table.detached))
-    geometry = ArmGeometry(links, A, B, radii, skip, "URDF collision primitives", labels, notes)
+    source = "URDF collision primitives" + (" and meshes as spheres" if meshes else "")
+    geometry = ArmGeometry(links, A, B, radii, skip, source, labels, notes, names)
     return _skip_touching(robot, geometry)
 
 
-def arm_geometry(robot: Robot, radius: float | None = None) -> ArmGeometry:
+def arm_geometry(robot: Robot, radius: float | None = None,
+                 tolerance: float = MESH_TOLERANCE) -> ArmGeometry:
     """The robot's collision geometry: its file's shapes or radius, else its URDF's collision
-    primitives, else default capsules.
+    elements (meshes covered by spheres), else default capsules; with the pairs its file
+    leaves out (skip by link number or name, an SRDF's pairs).
 
     Parameters
     ----------
     radius : float, optional
         m; asks for the default capsules with this radius whatever the file declares.
+    tolerance : float
+        m; how far the spheres covering a URDF's meshes may reach past them.
     """
     spec = robot.collision
     skip = spec.skip if spec else ()
     if radius is not None:
-        return default_geometry(robot, float(radius), skip)
-    if spec is not None and spec.shapes:
+        geometry = default_geometry(robot, float(radius), skip)
+    elif spec is not None and spec.shapes:
         s = spec.shapes
-        return ArmGeometry([x.link for x in s], [x.a for x in s], [x.b for x in s],
-                           [x.radius for x in s], spec.skip, "robot file",
-                           [f"robot file: collision.shapes[{i}]" for i in range(len(s))])
-    if spec is not None and spec.radius is not None:
-        return default_geometry(robot, spec.radius, skip)
-    from_urdf = urdf_geometry(robot, DEFAULT_RADIUS, skip)
-    return from_urdf if from_urdf is not None else default_geometry(robot, DEFAULT_RADIUS, skip)
+        link_names = chain_link_names(robot)
+        geometry = ArmGeometry([x.link for x in s], [x.a for x in s], [x.b for x in s],
+                               [x.radius for x in s], spec.skip, "robot file",
+                               [f"robot file: collision.shapes[{i}]" for i in range(len(s))],
+                               names=[x.name or link_names[x.link] for x in s])
+    elif spec is not None and spec.radius is not None:
+        geometry = default_geometry(robot, spec.radius, skip)
+    else:
+        geometry = urdf_geometry(robot, DEFAULT_RADIUS, skip, tolerance) or \
+            default_geometry(robot, DEFAULT_RADIUS, skip)
+    if spec is not None and spec.disabled:
+        geometry = geometry.with_disabled(spec.disabled, adjacent=spec.adjacent)
+    return geometry

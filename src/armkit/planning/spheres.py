@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 
 from armkit.errors import InputError
 
-TOLERANCE = 0.01        # m: how far the spheres may reach past the mesh, by default
+TOLERANCE = 0.02        # m: how far the spheres may reach past the mesh, by default
 MAX_VOXELS = 2_000_000  # the finest grid voxelised (the pitch grows for a large mesh)
 MAX_CANDIDATES = 600    # sphere centres offered to the greedy cover (a seeded subset)
 
