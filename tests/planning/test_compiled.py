@@ -111,7 +111,8 @@ def test_goal_cut_off_ends_with_the_budget_reason(tmp_path, planner):
 def test_compiled_paths_pass_the_dense_check(shelf_checker, seed):
     """RRT-Connect's raw path, the shortcut path and 10 waypoints: certified and found free by
     the independent dense check."""
-    result = plan(shelf_checker, SHELF_START, SHELF_GOAL, seed=seed, waypoints=10)
+    result = plan(shelf_checker, SHELF_START, SHELF_GOAL, seed=seed, waypoints=10,
+                  time_limit=np.inf)
     assert result.success, result.reason
     for path in (result.raw_path, result.path):
         assert shelf_checker.path_valid(path)
@@ -143,7 +144,7 @@ def test_random_scene_every_planner():
     Q = Q[checker.valid(Q)]
     for planner in PLANNERS:
         for start, goal in zip(Q[:2], Q[2:4]):
-            result = plan(checker, start, goal, planner=planner, seed=1, time_limit=60,
+            result = plan(checker, start, goal, planner=planner, seed=1, time_limit=np.inf,
                           max_iterations=400 if planner == "rrtstar" else None)
             if planner == "rrtstar" and not result.success:
                 assert result.reason.startswith("no path within the iteration budget")

@@ -38,6 +38,7 @@ def shelf_checker():
 @pytest.mark.parametrize("planner", PLANNERS)
 def test_shelf_paths_pass_the_dense_check(shelf_checker, planner):
     result = plan(shelf_checker, SHELF_START, SHELF_GOAL, planner=planner, seed=1, waypoints=10,
+                  time_limit=np.inf,
                   max_iterations=300 if planner == "rrtstar" else None)
     assert result.success, result.reason
     assert result.reason == "ok" and result.path.shape == (10, 6)
@@ -67,7 +68,7 @@ def test_random_scenes(seed):
         goal = np.clip(start + rng.uniform(-1.5, 1.5, 6), robot.lower, robot.upper)
         if checker.valid(goal) and not checker.edge_valid(start, goal)[0]:
             break
-    result = plan(checker, start, goal, seed=seed, time_limit=30)
+    result = plan(checker, start, goal, seed=seed, time_limit=np.inf)
     assert result.success, result.reason
     assert reference.dense_ok(checker, result.path)
     assert reference.dense_ok(checker, result.raw_path)
@@ -75,8 +76,8 @@ def test_random_scenes(seed):
 
 def test_same_seed_same_path(shelf_checker):
     for planner in PLANNERS:
-        kw = dict(planner=planner, waypoints=10, max_iterations=200 if planner == "rrtstar"
-                  else None)
+        kw = dict(planner=planner, waypoints=10, time_limit=np.inf,
+                  max_iterations=200 if planner == "rrtstar" else None)
         a = plan(shelf_checker, SHELF_START, SHELF_GOAL, seed=7, **kw)
         b = plan(shelf_checker, SHELF_START, SHELF_GOAL, seed=7, **kw)
         assert a.success and b.success
@@ -126,6 +127,7 @@ def test_user_validity_function_with_every_planner(planner):
         return np.linalg.norm(Q[:, None] - centres[None], axis=-1).min(axis=1) > radius
 
     result = plan(free, [0.05, 0.5], [0.95, 0.5], planner=planner, limits=([0, 0], [1, 1]),
+                  time_limit=np.inf,
                   resolution=0.002, seed=3, waypoints=12,
                   max_iterations=1500 if planner == "rrtstar" else None)
     assert result.success, result.reason
@@ -144,7 +146,8 @@ def test_direct_edge_first():
 def test_goal_pose_every_collision_free_ik_solution_is_a_goal(shelf_checker):
     robot = shelf_checker.robot
     T = armkit.fk(robot, SHELF_GOAL)
-    result = plan(shelf_checker, SHELF_START, goal_pose=T, seed=2, waypoints=10)
+    result = plan(shelf_checker, SHELF_START, goal_pose=T, seed=2, waypoints=10,
+                  time_limit=np.inf)
     assert result.success, result.reason
     assert len(result.goals) >= 1 and shelf_checker.valid(result.goals).all()
     np.testing.assert_allclose(armkit.fk(robot, result.path[-1]), T, atol=1e-9)

@@ -56,60 +56,81 @@ _ABOVE = 1e-12              # m: a clearance asked for up to a bound is asked a 
 # --- the model's arrays -----------------------------------------------------------------------
 #
 # G (float) and H (int), built once per robot (`CollisionModel`), read through the accessors
-# below. m parts (spheres and capsules), L groups (the links that carry parts, ordered by link),
-# LP link pairs and P part pairs tested:
+# below. m parts (spheres and capsules) on L links, in C clusters (a few parts of one link near
+# each other); LP link pairs, CP cluster pairs and P part pairs tested against each other:
 #
-#   H: m, L, LP, P, then per group (body, first part, part count), per link pair (group a,
-#      group b, first part pair, pair count), per part pair (part i, part j), per part 1 if a
-#      sphere. A group's body is the moving joint whose frame (after its motion) carries it, -1
-#      for the base (its parts are stored in world coordinates).
-#   G: per part a, b (3 each, in its body's frame) and radius; per group its bounding sphere
-#      (centre in its body's frame, radius); the displacement weights (one per joint value).
+#   H: m, L, C, LP, CP, P, then per link (body, first cluster, cluster count), per cluster
+#      (body, first part, part count), per link pair (link a, link b, first cluster pair, count),
+#      per cluster pair (cluster a, cluster b, first part pair, count), per part pair (i, j), per
+#      part 1 if a sphere. A body is the moving joint whose frame (after its motion) carries the
+#      link, -1 for the base (its parts are stored in world coordinates).
+#   G: per part a, b (3 each, in its body's frame) and radius; per link and per cluster its
+#      bounding sphere (centre in its body's frame, radius); the displacement weights (one per
+#      joint value).
 #
 # S (float) and K (int), per scene: K is the obstacle count then their kinds; S per obstacle its
 # inverse pose (3 x 4), dimensions (3), bounding ball (centre 3, radius), box in the world
 # (lower and upper corners), then the box of the whole scene.
 #
-# W (float), work per call: the bodies' frames (12 each), the groups' world centres and a flag
-# (their parts placed), the parts' world ends (6 each), scratch (14), a state (n).
+# W (float), work per call: the bodies' frames (12 each), the links' world centres (3 each), the
+# clusters' world centres and whether their parts are placed (1) or not (0), the parts' world
+# ends (6 each), scratch (14), a state (n).
 
-PART, GROUP, OBSTACLE = 7, 4, 25
-
-
-@_inline
-def group_at(H, g):
-    """Where group g's (body, first part, part count) start in H."""
-    return 4 + 3 * g
+PART, SPHERE_ROW, OBSTACLE = 7, 4, 25
 
 
 @_inline
-def link_pair_at(H, k):
-    """Where link pair k's (group a, group b, first pair, pair count) start in H."""
-    return 4 + 3 * H[1] + 4 * k
+def link_row(H, k):
+    """Where link k's (body, first cluster, cluster count) start in H."""
+    return 6 + 3 * k
 
 
 @_inline
-def part_pair_at(H, p):
+def cluster_row(H, c):
+    """Where cluster c's (body, first part, part count) start in H."""
+    return 6 + 3 * H[1] + 3 * c
+
+
+@_inline
+def link_pair_row(H, k):
+    """Where link pair k's (link a, link b, first cluster pair, count) start in H."""
+    return 6 + 3 * H[1] + 3 * H[2] + 4 * k
+
+
+@_inline
+def cluster_pair_row(H, k):
+    """Where cluster pair k's (cluster a, cluster b, first part pair, count) start in H."""
+    return 6 + 3 * H[1] + 3 * H[2] + 4 * H[3] + 4 * k
+
+
+@_inline
+def part_pair_row(H, p):
     """Where part pair p's (i, j) start in H."""
-    return 4 + 3 * H[1] + 4 * H[2] + 2 * p
+    return 6 + 3 * H[1] + 3 * H[2] + 4 * H[3] + 4 * H[4] + 2 * p
 
 
 @_inline
 def is_sphere(H, e):
     """Whether part e is a sphere (its ends coincide)."""
-    return H[4 + 3 * H[1] + 4 * H[2] + 2 * H[3] + e] != 0
+    return H[6 + 3 * H[1] + 3 * H[2] + 4 * H[3] + 4 * H[4] + 2 * H[5] + e] != 0
 
 
 @_inline
-def sphere_at(H, g):
-    """Where group g's bounding sphere (centre, radius) starts in G."""
-    return PART * H[0] + GROUP * g
+def link_sphere_at(H, k):
+    """Where link k's bounding sphere (centre, radius) starts in G."""
+    return PART * H[0] + SPHERE_ROW * k
+
+
+@_inline
+def cluster_sphere_at(H, c):
+    """Where cluster c's bounding sphere (centre, radius) starts in G."""
+    return PART * H[0] + SPHERE_ROW * (H[1] + c)
 
 
 @_inline
 def weights_at(H):
     """Where the displacement weights start in G."""
-    return PART * H[0] + GROUP * H[1]
+    return PART * H[0] + SPHERE_ROW * (H[1] + H[2])
 
 
 @_inline
@@ -121,7 +142,7 @@ def scene_box_at(K):
 @_inline
 def work_size(I, H, n):
     """The length of the work array W for a state of n values."""
-    return 12 * joint_count(I) + 4 * H[1] + 6 * H[0] + 14 + n
+    return 12 * joint_count(I) + 3 * H[1] + 4 * H[2] + 6 * H[0] + 14 + n
 
 
 @_inline
@@ -135,28 +156,18 @@ def _box_gap(x, y, z, S, at):
 
 
 @_inline
-def _place(g, G, H, W, wc, we):
-    """The world ends of group g's parts into W (once per state)."""
-    if W[wc + 4 * g + 3] != 0.0:
-        return
-    gh = group_at(H, g)
-    body, first, count = H[gh], H[gh + 1], H[gh + 2]
-    for e in range(first, first + count):
-        ge, o = PART * e, we + 6 * e
-        if body < 0:
-            for k in range(6):
-                W[o + k] = G[ge + k]
-            continue
-        f = 12 * body
-        for end in range(2):
-            if end == 1 and is_sphere(H, e):
-                W[o + 3], W[o + 4], W[o + 5] = W[o], W[o + 1], W[o + 2]
-                break
-            x, y, z = G[ge + 3 * end], G[ge + 3 * end + 1], G[ge + 3 * end + 2]
-            W[o + 3 * end] = W[f] * x + W[f + 1] * y + W[f + 2] * z + W[f + 3]
-            W[o + 3 * end + 1] = W[f + 4] * x + W[f + 5] * y + W[f + 6] * z + W[f + 7]
-            W[o + 3 * end + 2] = W[f + 8] * x + W[f + 9] * y + W[f + 10] * z + W[f + 11]
-    W[wc + 4 * g + 3] = 1.0
+def _to_world(W, f, x, y, z, o):
+    """The point (x, y, z) of the body whose frame is W[f:f + 12] into W[o:o + 3]."""
+    W[o] = W[f] * x + W[f + 1] * y + W[f + 2] * z + W[f + 3]
+    W[o + 1] = W[f + 4] * x + W[f + 5] * y + W[f + 6] * z + W[f + 7]
+    W[o + 2] = W[f + 8] * x + W[f + 9] * y + W[f + 10] * z + W[f + 11]
+
+
+@_inline
+def _apart(W, a, b, reach):
+    """Whether the points W[a:a + 3] and W[b:b + 3] are at least reach apart (reach > 0)."""
+    dx, dy, dz = W[a] - W[b], W[a + 1] - W[b + 1], W[a + 2] - W[b + 2]
+    return reach > 0.0 and dx * dx + dy * dy + dz * dz >= reach * reach
 
 
 @_jit
@@ -164,14 +175,19 @@ def free_distance(q, M, W, floor, cap):
     """The clearance (m) of the state q (n,): ``min(gap to any obstacle, gap between two tested
     parts / 2)``, returned as ``min(that, cap)``; it stops early, with some value <= floor,
     once a pair is within floor. M: (F, I, G, H, S, K), the chain (`KernelChain.floats`,
-    `.ints`), the model and the scene (`CollisionChecker.arrays`); W: work (`work_size`)."""
+    `.ints`), the model and the scene (`CollisionChecker.arrays`); W: work (`work_size`).
+
+    Bounding spheres first: a link pair (then a cluster pair) whose spheres are more than
+    2 best apart cannot lower best, nor a link (then a cluster) more than best from an
+    obstacle's box; part pairs are compared by squared distance before a square root."""
     F, I, G, H, S, K = M
     nj = joint_count(I)
-    m, L, LP = H[0], H[1], H[2]
-    wc = 12 * nj
-    we = wc + 4 * L
+    m, L, C, LP = H[0], H[1], H[2], H[3]
+    wl = 12 * nj
+    wc = wl + 3 * L
+    we = wc + 4 * C
     ws = we + 6 * m
-    bodies = H[group_at(H, L - 1)] + 1 if L > 0 else 0      # groups are ordered by body
+    bodies = H[link_row(H, L - 1)] + 1 if L > 0 else 0        # links are ordered by body
     T = pose_start(F, pre_at(nj))
     for i in range(bodies):
         T = move(T, joint_kind(I, i), joint_value(q, F, I, nj, i))
@@ -180,81 +196,130 @@ def free_distance(q, M, W, floor, cap):
          W[f + 9], W[f + 10], W[f + 11]) = T
         if i + 1 < bodies:
             T = then(T, F, link_at(nj, i))
-    for g in range(L):
-        body, gs, o = H[group_at(H, g)], sphere_at(H, g), wc + 4 * g
-        x, y, z = G[gs], G[gs + 1], G[gs + 2]
+    for k in range(L):
+        body, g, o = H[link_row(H, k)], link_sphere_at(H, k), wl + 3 * k
         if body < 0:
-            W[o], W[o + 1], W[o + 2] = x, y, z
+            W[o], W[o + 1], W[o + 2] = G[g], G[g + 1], G[g + 2]
         else:
-            f = 12 * body
-            W[o] = W[f] * x + W[f + 1] * y + W[f + 2] * z + W[f + 3]
-            W[o + 1] = W[f + 4] * x + W[f + 5] * y + W[f + 6] * z + W[f + 7]
-            W[o + 2] = W[f + 8] * x + W[f + 9] * y + W[f + 10] * z + W[f + 11]
-        W[o + 3] = 0.0
+            _to_world(W, 12 * body, G[g], G[g + 1], G[g + 2], o)
+    for c in range(C):
+        at, g, o = cluster_row(H, c), cluster_sphere_at(H, c), wc + 4 * c
+        if H[at] < 0:
+            W[o], W[o + 1], W[o + 2] = G[g], G[g + 1], G[g + 2]
+        else:
+            _to_world(W, 12 * H[at], G[g], G[g + 1], G[g + 2], o)
+        W[o + 3] = 0.0                      # its parts not placed yet
     best = cap
-    # The arm against itself: link pairs whose bounding spheres are 2 best apart are skipped.
+    # The arm against itself. (Row offsets read once: the loops below are the hot ones.)
+    h_cp, h_pp, h_sphere = cluster_pair_row(H, 0), part_pair_row(H, 0), part_pair_row(H, H[5])
+    g_link, g_cluster = link_sphere_at(H, 0), cluster_sphere_at(H, 0)
     for k in range(LP):
-        at = link_pair_at(H, k)
-        ga, gb, first, count = H[at], H[at + 1], H[at + 2], H[at + 3]
-        a, b = wc + 4 * ga, wc + 4 * gb
-        dx, dy, dz = W[a] - W[b], W[a + 1] - W[b + 1], W[a + 2] - W[b + 2]
-        reach = 2.0 * best + G[sphere_at(H, ga) + 3] + G[sphere_at(H, gb) + 3]
-        if reach > 0.0 and dx * dx + dy * dy + dz * dz >= reach * reach:
+        at = link_pair_row(H, k)
+        la, lb, first, count = H[at], H[at + 1], H[at + 2], H[at + 3]
+        if _apart(W, wl + 3 * la, wl + 3 * lb, 2.0 * best + G[g_link + 4 * la + 3]
+                  + G[g_link + 4 * lb + 3]):
             continue
-        _place(ga, G, H, W, wc, we)
-        _place(gb, G, H, W, wc, we)
-        for p in range(first, first + count):
-            pp = part_pair_at(H, p)
-            i, j = H[pp], H[pp + 1]
-            u, v = we + 6 * i, we + 6 * j
-            if is_sphere(H, i) and is_sphere(H, j):
-                dx, dy, dz = W[u] - W[v], W[u + 1] - W[v + 1], W[u + 2] - W[v + 2]
-                d = math.sqrt(dx * dx + dy * dy + dz * dz)
-            else:
-                d = segment_segment(W[u], W[u + 1], W[u + 2], W[u + 3], W[u + 4], W[u + 5],
-                                    W[v], W[v + 1], W[v + 2], W[v + 3], W[v + 4], W[v + 5])
-            gap = 0.5 * (d - G[PART * i + 6] - G[PART * j + 6])
-            if gap < best:
-                best = gap
-                if best <= floor:
-                    return best
-    # The arm against the scene: a link whose bounding sphere is best from the scene's box, or
-    # from an obstacle's box, skips it.
+        for cp in range(first, first + count):
+            at = h_cp + 4 * cp
+            ca, cb, pfirst, pcount = H[at], H[at + 1], H[at + 2], H[at + 3]
+            if _apart(W, wc + 4 * ca, wc + 4 * cb, 2.0 * best + G[g_cluster + 4 * ca + 3]
+                      + G[g_cluster + 4 * cb + 3]):
+                continue
+            # Their parts placed (once per state). (Written out here, not a helper: numba
+            # calls a helper that takes arrays instead of inlining it.)
+            for c in (ca, cb):
+                if W[wc + 4 * c + 3] == 0.0:
+                    at = cluster_row(H, c)
+                    body, e0, e1 = H[at], H[at + 1], H[at + 1] + H[at + 2]
+                    for e in range(e0, e1):
+                        ge, o = PART * e, we + 6 * e
+                        if body < 0:
+                            for k in range(6):
+                                W[o + k] = G[ge + k]
+                        else:
+                            _to_world(W, 12 * body, G[ge], G[ge + 1], G[ge + 2], o)
+                            if H[h_sphere + e] != 0:
+                                W[o + 3], W[o + 4], W[o + 5] = W[o], W[o + 1], W[o + 2]
+                            else:
+                                _to_world(W, 12 * body, G[ge + 3], G[ge + 4], G[ge + 5], o + 3)
+                    W[wc + 4 * c + 3] = 1.0
+            for p in range(pfirst, pfirst + pcount):
+                i, j = H[h_pp + 2 * p], H[h_pp + 2 * p + 1]
+                u, v = we + 6 * i, we + 6 * j
+                ri, rj = G[PART * i + 6], G[PART * j + 6]
+                if H[h_sphere + i] != 0 and H[h_sphere + j] != 0:
+                    if _apart(W, u, v, 2.0 * best + ri + rj):
+                        continue
+                    dx, dy, dz = W[u] - W[v], W[u + 1] - W[v + 1], W[u + 2] - W[v + 2]
+                    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+                else:
+                    d = segment_segment(W[u], W[u + 1], W[u + 2], W[u + 3], W[u + 4], W[u + 5],
+                                        W[v], W[v + 1], W[v + 2], W[v + 3], W[v + 4], W[v + 5])
+                gap = 0.5 * (d - ri - rj)
+                if gap < best:
+                    best = gap
+                    if best <= floor:
+                        return best
+    # The arm against the scene.
     nobs = K[0]
     if nobs == 0:
         return best
     union = scene_box_at(K)
-    for g in range(L):
-        o = wc + 4 * g
-        x, y, z, radius = W[o], W[o + 1], W[o + 2], G[sphere_at(H, g) + 3]
+    for k in range(L):
+        o = wl + 3 * k
+        x, y, z, radius = W[o], W[o + 1], W[o + 2], G[g_link + 4 * k + 3]
         if _box_gap(x, y, z, S, union) - radius >= best:
             continue
-        gh = group_at(H, g)
-        first, count = H[gh + 1], H[gh + 2]
+        at = link_row(H, k)
+        cfirst, ccount = H[at + 1], H[at + 2]
         for ob in range(nobs):
             s = OBSTACLE * ob
             if _box_gap(x, y, z, S, s + 19) - radius >= best:
                 continue
-            _place(g, G, H, W, wc, we)
             kind = K[1 + ob]
-            for e in range(first, first + count):
-                u = we + 6 * e
-                if is_sphere(H, e):
-                    px, py, pz = W[u], W[u + 1], W[u + 2]
-                    d = point_distance(
-                        kind, S, s + 12,
-                        S[s] * px + S[s + 1] * py + S[s + 2] * pz + S[s + 3],
-                        S[s + 4] * px + S[s + 5] * py + S[s + 6] * pz + S[s + 7],
-                        S[s + 8] * px + S[s + 9] * py + S[s + 10] * pz + S[s + 11])
-                else:
-                    to_local(S, s, W[u], W[u + 1], W[u + 2], W[u + 3], W[u + 4], W[u + 5],
-                             W, ws)
-                    d = local_distance(kind, S, s + 12, W, ws)
-                d -= G[PART * e + 6]
-                if d < best:
-                    best = d
-                    if best <= floor:
-                        return best
+            for ca in range(cfirst, cfirst + ccount):
+                oc = wc + 4 * ca
+                if _box_gap(W[oc], W[oc + 1], W[oc + 2], S, s + 19) - \
+                        G[g_cluster + 4 * ca + 3] >= best:
+                    continue
+                cb = ca
+                # Their parts placed (once per state). (Written out here, not a helper: numba
+                # calls a helper that takes arrays instead of inlining it.)
+                for c in (ca, cb):
+                    if W[wc + 4 * c + 3] == 0.0:
+                        at = cluster_row(H, c)
+                        body, e0, e1 = H[at], H[at + 1], H[at + 1] + H[at + 2]
+                        for e in range(e0, e1):
+                                ge, o = PART * e, we + 6 * e
+                                if body < 0:
+                                    for k in range(6):
+                                        W[o + k] = G[ge + k]
+                                else:
+                                    _to_world(W, 12 * body, G[ge], G[ge + 1], G[ge + 2], o)
+                                    if H[h_sphere + e] != 0:
+                                        W[o + 3], W[o + 4], W[o + 5] = W[o], W[o + 1], W[o + 2]
+                                    else:
+                                        _to_world(W, 12 * body, G[ge + 3], G[ge + 4], G[ge + 5], o + 3)
+                        W[wc + 4 * c + 3] = 1.0
+                at = cluster_row(H, ca)
+                for e in range(H[at + 1], H[at + 1] + H[at + 2]):
+                    u = we + 6 * e
+                    if H[h_sphere + e] != 0:
+                        px, py, pz = W[u], W[u + 1], W[u + 2]
+                        d = point_distance(
+                            kind, S, s + 12,
+                            S[s] * px + S[s + 1] * py + S[s + 2] * pz + S[s + 3],
+                            S[s + 4] * px + S[s + 5] * py + S[s + 6] * pz + S[s + 7],
+                            S[s + 8] * px + S[s + 9] * py + S[s + 10] * pz + S[s + 11])
+                    else:
+                        to_local(S, s, W[u], W[u + 1], W[u + 2], W[u + 3], W[u + 4],
+                                 W[u + 5], W, ws)
+                        d = local_distance(kind, S, s + 12, W, ws)
+                    d -= G[PART * e + 6]
+                    if d < best:
+                        best = d
+                        if best <= floor:
+                            return best
     return best
 
 
@@ -460,6 +525,23 @@ def _bounding_spheres(a: NDArray, b: NDArray, radius: NDArray) -> tuple[NDArray,
     return c, float(r) * (1 + 1e-12) + 1e-12
 
 
+CLUSTER = 4                 # parts per cluster (a few parts near each other on one link)
+
+
+def _clusters(link: NDArray, centres: NDArray) -> list[NDArray]:
+    """The parts' indices in clusters of at most CLUSTER, each on one link, the links in order:
+    the parts of a link sorted along the main axis of their centres (m, 3), then cut."""
+    out = []
+    for k in np.unique(link):
+        idx = np.flatnonzero(link == k)
+        if len(idx) > CLUSTER:
+            c = centres[idx] - centres[idx].mean(axis=0)
+            axis = np.linalg.svd(c, full_matrices=False)[2][0]
+            idx = idx[np.argsort(c @ axis, kind="stable")]
+        out.extend(idx[i:i + CLUSTER] for i in range(0, len(idx), CLUSTER))
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class CollisionModel:
     """A robot's collision geometry in the checker's kernel form, built once per robot.
@@ -494,44 +576,60 @@ class CollisionModel:
         if not isinstance(geometry, ArmGeometry):
             raise InputError(f"geometry: expected an ArmGeometry, found "
                              f"{type(geometry).__name__}")
-        links = self.robot.chain.n_joints
-        if len(geometry) and geometry.link.max() > links:
-            raise InputError(f"geometry: expected links 0 .. {links} of "
+        last = self.robot.chain.n_joints
+        if len(geometry) and geometry.link.max() > last:
+            raise InputError(f"geometry: expected links 0 .. {last} of "
                              f"{self.robot.name}, found link {geometry.link.max()}")
         weights = displacement_weights(self.robot, geometry)
-        # Parts in their bodies' frames, ordered by link (the base's in world coordinates).
-        order = np.argsort(geometry.link, kind="stable")
-        link = geometry.link[order]
+        # Parts in their bodies' frames, ordered by link and by cluster within a link (the
+        # base's in world coordinates).
         to_body = link_to_body(self.robot)
+        link = geometry.link
         T = np.where((link == 0)[:, None, None], self.robot.chain.T_base, to_body[link])
-        a = np.einsum("kij,kj->ki", T[:, :3, :3], geometry.a[order]) + T[:, :3, 3]
-        b = np.einsum("kij,kj->ki", T[:, :3, :3], geometry.b[order]) + T[:, :3, 3]
-        radius = geometry.radius[order]
+        a = np.einsum("kij,kj->ki", T[:, :3, :3], geometry.a) + T[:, :3, 3]
+        b = np.einsum("kij,kj->ki", T[:, :3, :3], geometry.b) + T[:, :3, 3]
+        clusters = _clusters(link, 0.5 * (geometry.a + geometry.b))
+        order = np.concatenate(clusters) if clusters else np.empty(0, np.int64)
+        a, b, radius, link = a[order], b[order], geometry.radius[order], link[order]
         sphere = np.all(geometry.a[order] == geometry.b[order], axis=1)
-        group_links, first, count = np.unique(link, return_index=True, return_counts=True)
-        group_of = np.searchsorted(group_links, link)
-        spheres = [_bounding_spheres(a[f:f + c], b[f:f + c], radius[f:f + c])
-                   for f, c in zip(first, count)]
+        sizes = np.array([len(c) for c in clusters], dtype=np.int64)
+        first = np.cumsum(sizes) - sizes
+        cluster_link = link[first]
+        links, link_first, link_count = np.unique(cluster_link, return_index=True,
+                                                  return_counts=True)
+        link_of = np.searchsorted(links, cluster_link)              # per cluster
+        cluster_of = np.repeat(np.arange(len(clusters)), sizes)     # per part
+        link_spheres = [_bounding_spheres(a[link == k], b[link == k], radius[link == k])
+                        for k in links]
+        cluster_spheres = [_bounding_spheres(a[f:f + c], b[f:f + c], radius[f:f + c])
+                           for f, c in zip(first, sizes)]
         rank = np.empty(len(order), np.int64)
         rank[order] = np.arange(len(order))
         pairs = np.sort(rank[geometry.self_pairs()].reshape(-1, 2), axis=1)
-        keys = group_of[pairs[:, 0]] * len(group_links) + group_of[pairs[:, 1]]
-        pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0], keys))]
-        keys = np.sort(keys)
-        lp_keys, lp_first, lp_count = np.unique(keys, return_index=True, return_counts=True)
-        link_pairs = np.column_stack([lp_keys // max(len(group_links), 1),
-                                      lp_keys % max(len(group_links), 1), lp_first, lp_count])
-        H = np.concatenate([[len(order), len(group_links), len(link_pairs), len(pairs)],
-                            np.column_stack([group_links - 1, first, count]).reshape(-1),
-                            link_pairs.reshape(-1), pairs.reshape(-1),
-                            sphere.astype(np.int64)]).astype(np.int64)
+        # Part pairs sorted by link pair, then cluster pair: each a contiguous run.
+        C, L = max(len(clusters), 1), max(len(links), 1)
+        ci, cj = cluster_of[pairs[:, 0]], cluster_of[pairs[:, 1]]
+        key = (link_of[ci] * L + link_of[cj]) * C * C + ci * C + cj
+        sort = np.lexsort((pairs[:, 1], pairs[:, 0], key))
+        pairs, key = pairs[sort], key[sort]
+        cp_keys, cp_first, cp_count = np.unique(key, return_index=True, return_counts=True)
+        cp_a, cp_b = (cp_keys % (C * C)) // C, cp_keys % C
+        lp_keys, lp_first, lp_count = np.unique(cp_keys // (C * C), return_index=True,
+                                                return_counts=True)
+        H = np.concatenate([
+            [len(order), len(links), len(clusters), len(lp_keys), len(cp_keys), len(pairs)],
+            np.column_stack([links - 1, link_first, link_count]).reshape(-1),
+            np.column_stack([cluster_link - 1, first, sizes]).reshape(-1),
+            np.column_stack([lp_keys // L, lp_keys % L, lp_first, lp_count]).reshape(-1),
+            np.column_stack([cp_a, cp_b, cp_first, cp_count]).reshape(-1),
+            pairs.reshape(-1), sphere.astype(np.int64)]).astype(np.int64)
         G = np.concatenate([np.column_stack([a, b, radius]).reshape(-1),
-                            np.array([[*c, r] for c, r in spheres]).reshape(-1),
-                            weights]).astype(float)
+                            np.array([[*c, r] for c, r in link_spheres + cluster_spheres]
+                                     ).reshape(-1), weights]).astype(float)
         for x in (weights, G, H):
             x.setflags(write=False)
         for name, value in (("geometry", geometry), ("weights", weights), ("arrays", (G, H)),
-                            ("link_pairs", len(link_pairs)), ("part_pairs", len(pairs))):
+                            ("link_pairs", len(lp_keys)), ("part_pairs", len(pairs))):
             object.__setattr__(self, name, value)
 
 
@@ -670,9 +768,14 @@ class CollisionChecker:
         return self.valid(q)
 
     def valid_states(self, Q: NDArray) -> NDArray:
-        """`valid` for states (k, n) already checked for shape (the planners' call)."""
-        return self._free(np.asarray(Q, dtype=float), self.padding, self._valid_cap) > \
-            self.padding
+        """`valid` for states (k, n) already checked for shape and values (the planners'
+        call)."""
+        if Q.shape[0] > LIGHT_STATES or not (Q.dtype == np.float64 and Q.flags.c_contiguous):
+            return self._free(np.asarray(Q, dtype=float), self.padding, self._valid_cap) > \
+                self.padding
+        out = np.empty(Q.shape[0])
+        states_kernel.light(Q, self.arrays, self.padding, self._valid_cap, out)
+        return out > self.padding
 
     def polyline_free(self, path: NDArray, deadline: NDArray = _NO_DEADLINE
                       ) -> tuple[bool, int]:
@@ -680,8 +783,9 @@ class CollisionChecker:
         (no shape checks: the planners' call), and the states checked. An edge not finished
         by the deadline (`armkit.planning.clock.timer`) is not free."""
         status, checked = polyline_kernel.light(
-            _writable(path), self.arrays, self.padding, self.resolution,
-            np.empty((4, QUEUE_SIZE)), clock_gettime, deadline,
+            path if path.flags.writeable and path.flags.c_contiguous else _writable(path),
+            self.arrays, self.padding, self.resolution, np.empty((4, QUEUE_SIZE)),
+            clock_gettime, deadline,
             0 if deadline is _NO_DEADLINE else (16 if polyline_kernel.is_compiled else 1))
         return status == FREE, int(checked)
 

@@ -7,10 +7,11 @@ from the goals in RRT-Connect; with each node its free distance, so an edge from
 check it again), the nearest neighbour is a brute-force scan of the contiguous node array (a
 few hundred nodes at most on the shelf: a spatial index does not pay), and the random numbers
 come from a seeded splitmix64 generator whose state is an array: the same seed gives the same
-path. The kernel runs a number of iterations and returns;
-Python calls it again (growing the arrays when a tree is full) until a path is found, the
-iteration budget is spent or the time limit has passed, so the state between calls is all in
-the arrays and a path does not depend on how the iterations were split.
+path. The kernel runs until it finds a path, spends its iterations, passes its deadline (read
+inside the loop through `armkit.planning.clock`) or pauses: as Python, a loop pauses every
+`SLICE` s so that a kernel compiled meanwhile takes over. Python calls it again (growing the
+arrays when a tree is full) until it is done; the state between calls is all in the arrays, so a
+path does not depend on how the iterations were split.
 """
 
 from __future__ import annotations
@@ -25,10 +26,11 @@ from armkit.planning.clock import clock_gettime, expired, left, paused, paused_a
 from armkit.planning.collision import FREE, QUEUE_SIZE, TIMED_OUT, CollisionChecker, edge_free, \
     work_size
 
-# numba's cache keys a kernel on its own file only: these kernels compile collision.py's code
-# into themselves, so a change to the checker's kernels or its model's layout must come with a
-# change to this file (or a cleared cache), else the cached planners read the new model with the
-# old code. (Changed with the checker's work arrays of 2026-11-24.)
+# numba's cache keys a kernel on its own file only: these kernels compile collision.py's,
+# distances.py's, clock.py's and the kinematic core's code into themselves, so a change to those
+# kernels or to the model's layout must come with a change to this file (or a cleared cache),
+# else the cached planners read the new model with the old code. (Changed with the clustered
+# sphere model and the deadline of 2026-11-27.)
 _jit = kernel(cache=True, nogil=True)
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2

@@ -349,8 +349,8 @@ def chain_link_names(robot: Robot) -> list[str]:
 
 
 def urdf_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
-                  skip: tuple[tuple[int, int], ...] = (), tolerance: float = MESH_TOLERANCE
-                  ) -> ArmGeometry | None:
+                  skip: tuple[tuple[int, int], ...] = (), tolerance: float = MESH_TOLERANCE,
+                  touching: bool = True) -> ArmGeometry | None:
     """The parts of a URDF robot's <collision> elements; None if it has none it can use.
 
     Each box, cylinder and sphere on a link rigidly attached to the chain becomes the capsule
@@ -359,8 +359,8 @@ def urdf_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
     it within `tolerance` m (`armkit.planning.spheres.spheres_from_mesh`). An arm link with a
     URDF link whose collisions are all unread meshes gets its default capsule
     (`default_geometry`, of `radius` m), and the notes say why. Each part is named by its URDF
-    link. Link pairs are skipped as for the default capsules (adjacent links, `skip`, and
-    pairs touching in most sampled configurations).
+    link. Link pairs are skipped as for the default capsules (adjacent links, `skip`, and,
+    if `touching`, pairs touching in most sampled configurations).
     """
     table = robot.table
     if not isinstance(table, URDFTable):
@@ -424,7 +424,7 @@ def urdf_geometry(robot: Robot, radius: float = DEFAULT_RADIUS,
                      + ", ".join(table.detached))
     source = "URDF collision primitives" + (" and meshes as spheres" if meshes else "")
     geometry = ArmGeometry(links, A, B, radii, skip, source, labels, notes, names)
-    return _skip_touching(robot, geometry)
+    return _skip_touching(robot, geometry) if touching else geometry
 
 
 def arm_geometry(robot: Robot, radius: float | None = None,
@@ -454,7 +454,9 @@ def arm_geometry(robot: Robot, radius: float | None = None,
     elif spec is not None and spec.radius is not None:
         geometry = default_geometry(robot, spec.radius, skip)
     else:
-        geometry = urdf_geometry(robot, DEFAULT_RADIUS, skip, tolerance) or \
+        # With an SRDF its pairs decide: no sampled pass of armkit's own.
+        srdf = spec is not None and spec.adjacent
+        geometry = urdf_geometry(robot, DEFAULT_RADIUS, skip, tolerance, not srdf) or \
             default_geometry(robot, DEFAULT_RADIUS, skip)
     if spec is not None and spec.disabled:
         geometry = geometry.with_disabled(spec.disabled, adjacent=spec.adjacent)
