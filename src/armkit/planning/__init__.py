@@ -27,5 +27,6 @@ from armkit.planning.smooth import path_length, resample, resample_keeping_verti
 
 __all__ = ["Scene", "Box", "Sphere", "Cylinder", "Capsule", "ArmGeometry", "arm_geometry",
            "default_geometry", "CollisionChecker", "CollisionModel", "displacement_weights",
-           "ValidityFunction", "PlanResult", "PlanSettings", "PLANNERS", "plan", "goals_from_pose", "shortcut", "resample",
-           "resample_keeping_vertices", "path_length", "urdf_geometry", "primitive_capsule"]
+           "ValidityFunction", "PlanResult", "PlanSettings", "PLANNERS", "plan", "goals_from_pose",
+           "shortcut", "resample", "resample_keeping_vertices", "path_length", "urdf_geometry",
+           "primitive_capsule"]

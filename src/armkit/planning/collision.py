@@ -74,7 +74,8 @@ _ABOVE = 1e-12              # m: a clearance asked for up to a bound is asked a 
 #
 # W (float), work per call: the bodies' frames (12 each), the links' world centres (3 each), the
 # clusters' world centres and whether their parts are placed (1) or not (0), the parts' world
-# ends (6 each), scratch (14), a state (n).
+# ends (6 each), scratch (14), the cluster and obstacle of the last closest pair found (-1: none;
+# consecutive states are alike, and a small best early lets the bounds skip more), a state (n).
 
 PART, SPHERE_ROW, OBSTACLE = 7, 4, 25
 
@@ -142,7 +143,17 @@ def scene_box_at(K):
 @_inline
 def work_size(I, H, n):
     """The length of the work array W for a state of n values."""
-    return 12 * joint_count(I) + 3 * H[1] + 4 * H[2] + 6 * H[0] + 14 + n
+    return 12 * joint_count(I) + 3 * H[1] + 4 * H[2] + 6 * H[0] + 16 + n
+
+
+@_inline
+def new_work(M, n):
+    """A work array W for the model and scene M and states of n values, with no closest pair
+    known yet."""
+    W = np.empty(work_size(M[1], M[3], n))
+    at = W.shape[0] - n - 2
+    W[at], W[at + 1] = -1.0, -1.0
+    return W
 
 
 @_inline
@@ -210,9 +221,80 @@ def free_distance(q, M, W, floor, cap):
             _to_world(W, 12 * H[at], G[g], G[g + 1], G[g + 2], o)
         W[o + 3] = 0.0                      # its parts not placed yet
     best = cap
-    # The arm against itself. (Row offsets read once: the loops below are the hot ones.)
+    # Row offsets read once: the loops below are the hot ones.
     h_cp, h_pp, h_sphere = cluster_pair_row(H, 0), part_pair_row(H, 0), part_pair_row(H, H[5])
     g_link, g_cluster = link_sphere_at(H, 0), cluster_sphere_at(H, 0)
+    # The arm against the scene first: an obstacle is most often what is nearest, and a small
+    # best early lets the bounds skip more pairs. Pass k = -1 tries the last closest pair
+    # (W[wt]: its cluster and obstacle) before every link's.
+    nobs = K[0]
+    union = scene_box_at(K)
+    wt = ws + 14
+    for k in range(-1, L if nobs > 0 else 0):
+        x = y = z = 0.0
+        radius = np.inf                     # pass -1 passes the links' bounds
+        if k < 0:
+            if W[wt] < 0.0:
+                continue
+            cfirst, ccount, ob0, ob1 = int(W[wt]), 1, int(W[wt + 1]), int(W[wt + 1]) + 1
+        else:
+            o = wl + 3 * k
+            x, y, z, radius = W[o], W[o + 1], W[o + 2], G[g_link + 4 * k + 3]
+            if _box_gap(x, y, z, S, union) - radius >= best:
+                continue
+            at = link_row(H, k)
+            cfirst, ccount, ob0, ob1 = H[at + 1], H[at + 2], 0, nobs
+        for ob in range(ob0, ob1):
+            s = OBSTACLE * ob
+            if _box_gap(x, y, z, S, s + 19) - radius >= best:
+                continue
+            kind = K[1 + ob]
+            for ca in range(cfirst, cfirst + ccount):
+                oc = wc + 4 * ca
+                if _box_gap(W[oc], W[oc + 1], W[oc + 2], S, s + 19) - \
+                        G[g_cluster + 4 * ca + 3] >= best:
+                    continue
+                cb = ca
+                # Their parts placed (once per state). (Written out here, not a helper: numba
+                # calls a helper that takes arrays instead of inlining it.)
+                for c in (ca, cb):
+                    if W[wc + 4 * c + 3] == 0.0:
+                        at = cluster_row(H, c)
+                        body, e0, e1 = H[at], H[at + 1], H[at + 1] + H[at + 2]
+                        for e in range(e0, e1):
+                            ge, o = PART * e, we + 6 * e
+                            if body < 0:
+                                for j in range(6):
+                                    W[o + j] = G[ge + j]
+                            else:
+                                _to_world(W, 12 * body, G[ge], G[ge + 1], G[ge + 2], o)
+                                if H[h_sphere + e] != 0:
+                                    W[o + 3], W[o + 4], W[o + 5] = W[o], W[o + 1], W[o + 2]
+                                else:
+                                    _to_world(W, 12 * body, G[ge + 3], G[ge + 4], G[ge + 5],
+                                              o + 3)
+                        W[wc + 4 * c + 3] = 1.0
+                at = cluster_row(H, ca)
+                for e in range(H[at + 1], H[at + 1] + H[at + 2]):
+                    u = we + 6 * e
+                    if H[h_sphere + e] != 0:
+                        px, py, pz = W[u], W[u + 1], W[u + 2]
+                        d = point_distance(
+                            kind, S, s + 12,
+                            S[s] * px + S[s + 1] * py + S[s + 2] * pz + S[s + 3],
+                            S[s + 4] * px + S[s + 5] * py + S[s + 6] * pz + S[s + 7],
+                            S[s + 8] * px + S[s + 9] * py + S[s + 10] * pz + S[s + 11])
+                    else:
+                        to_local(S, s, W[u], W[u + 1], W[u + 2], W[u + 3], W[u + 4],
+                                 W[u + 5], W, ws)
+                        d = local_distance(kind, S, s + 12, W, ws)
+                    d -= G[PART * e + 6]
+                    if d < best:
+                        best = d
+                        W[wt], W[wt + 1] = ca, ob
+                        if best <= floor:
+                            return best
+    # The arm against itself.
     for k in range(LP):
         at = link_pair_row(H, k)
         la, lb, first, count = H[at], H[at + 1], H[at + 2], H[at + 3]
@@ -234,14 +316,15 @@ def free_distance(q, M, W, floor, cap):
                     for e in range(e0, e1):
                         ge, o = PART * e, we + 6 * e
                         if body < 0:
-                            for k in range(6):
-                                W[o + k] = G[ge + k]
+                            for j in range(6):
+                                W[o + j] = G[ge + j]
                         else:
                             _to_world(W, 12 * body, G[ge], G[ge + 1], G[ge + 2], o)
                             if H[h_sphere + e] != 0:
                                 W[o + 3], W[o + 4], W[o + 5] = W[o], W[o + 1], W[o + 2]
                             else:
-                                _to_world(W, 12 * body, G[ge + 3], G[ge + 4], G[ge + 5], o + 3)
+                                _to_world(W, 12 * body, G[ge + 3], G[ge + 4], G[ge + 5],
+                                          o + 3)
                     W[wc + 4 * c + 3] = 1.0
             for p in range(pfirst, pfirst + pcount):
                 i, j = H[h_pp + 2 * p], H[h_pp + 2 * p + 1]
@@ -260,66 +343,6 @@ def free_distance(q, M, W, floor, cap):
                     best = gap
                     if best <= floor:
                         return best
-    # The arm against the scene.
-    nobs = K[0]
-    if nobs == 0:
-        return best
-    union = scene_box_at(K)
-    for k in range(L):
-        o = wl + 3 * k
-        x, y, z, radius = W[o], W[o + 1], W[o + 2], G[g_link + 4 * k + 3]
-        if _box_gap(x, y, z, S, union) - radius >= best:
-            continue
-        at = link_row(H, k)
-        cfirst, ccount = H[at + 1], H[at + 2]
-        for ob in range(nobs):
-            s = OBSTACLE * ob
-            if _box_gap(x, y, z, S, s + 19) - radius >= best:
-                continue
-            kind = K[1 + ob]
-            for ca in range(cfirst, cfirst + ccount):
-                oc = wc + 4 * ca
-                if _box_gap(W[oc], W[oc + 1], W[oc + 2], S, s + 19) - \
-                        G[g_cluster + 4 * ca + 3] >= best:
-                    continue
-                cb = ca
-                # Their parts placed (once per state). (Written out here, not a helper: numba
-                # calls a helper that takes arrays instead of inlining it.)
-                for c in (ca, cb):
-                    if W[wc + 4 * c + 3] == 0.0:
-                        at = cluster_row(H, c)
-                        body, e0, e1 = H[at], H[at + 1], H[at + 1] + H[at + 2]
-                        for e in range(e0, e1):
-                                ge, o = PART * e, we + 6 * e
-                                if body < 0:
-                                    for k in range(6):
-                                        W[o + k] = G[ge + k]
-                                else:
-                                    _to_world(W, 12 * body, G[ge], G[ge + 1], G[ge + 2], o)
-                                    if H[h_sphere + e] != 0:
-                                        W[o + 3], W[o + 4], W[o + 5] = W[o], W[o + 1], W[o + 2]
-                                    else:
-                                        _to_world(W, 12 * body, G[ge + 3], G[ge + 4], G[ge + 5], o + 3)
-                        W[wc + 4 * c + 3] = 1.0
-                at = cluster_row(H, ca)
-                for e in range(H[at + 1], H[at + 1] + H[at + 2]):
-                    u = we + 6 * e
-                    if H[h_sphere + e] != 0:
-                        px, py, pz = W[u], W[u + 1], W[u + 2]
-                        d = point_distance(
-                            kind, S, s + 12,
-                            S[s] * px + S[s + 1] * py + S[s + 2] * pz + S[s + 3],
-                            S[s + 4] * px + S[s + 5] * py + S[s + 6] * pz + S[s + 7],
-                            S[s + 8] * px + S[s + 9] * py + S[s + 10] * pz + S[s + 11])
-                    else:
-                        to_local(S, s, W[u], W[u + 1], W[u + 2], W[u + 3], W[u + 4],
-                                 W[u + 5], W, ws)
-                        d = local_distance(kind, S, s + 12, W, ws)
-                    d -= G[PART * e + 6]
-                    if d < best:
-                        best = d
-                        if best <= floor:
-                            return best
     return best
 
 
@@ -397,7 +420,7 @@ LIGHT_STATES = 1024         # states checked as Python before the kernel is comp
 @_inline
 def _states_span(Q, M, floor, cap, out, start, stop):
     """`states_kernel` for the states start .. stop - 1 of Q (k, n), with work of its own."""
-    W = np.empty(work_size(M[1], M[3], 0))
+    W = new_work(M, 0)
     f = np.nan
     for s in range(start, stop):
         finite = True
@@ -414,8 +437,13 @@ def _states_span(Q, M, floor, cap, out, start, stop):
 def states_kernel(Q, M, floor, cap, out):
     """`free_distance` (with floor and cap) of the states Q (k, n) into out (k,), or with out
     empty (0,) only returned (one state, nothing written); NaN for a state with a value that
-    is not finite. Returns the last state's."""
-    return _states_span(Q, M, floor, cap, out, 0, Q.shape[0])
+    is not finite. Returns the last state's. The states go in chunks of BATCH_CHUNK, each
+    starting afresh (no closest pair carried over), as in `states_parallel`: both give the
+    same values, early verdicts included."""
+    f = np.nan
+    for start in range(0, Q.shape[0], BATCH_CHUNK):
+        f = _states_span(Q, M, floor, cap, out, start, min(Q.shape[0], start + BATCH_CHUNK))
+    return f
 
 
 @kernel(cache=True, nogil=True, parallel=True)
@@ -433,7 +461,7 @@ def polyline_kernel(P, M, padding, resolution, queue, clock, deadline, every):
     """Whether every waypoint of P (k, n) and every straight edge between consecutive ones is
     certified free (`edge_free`; one waypoint: its state): (FREE, BLOCKED or TIMED_OUT,
     states checked)."""
-    W = np.empty(work_size(M[1], M[3], P.shape[1]))
+    W = new_work(M, P.shape[1])
     checked = 0
     for i in range(max(P.shape[0] - 1, 1)):          # one waypoint: the edge to itself
         status, c, _ = edge_free(P[i], P[min(i + 1, P.shape[0] - 1)], M, W, padding,

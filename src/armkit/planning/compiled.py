@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from armkit.jit import kernel
 from armkit.planning.clock import clock_gettime, expired, left, paused, paused_after
 from armkit.planning.collision import FREE, QUEUE_SIZE, TIMED_OUT, CollisionChecker, edge_free, \
-    work_size
+    new_work
 
 # numba's cache keys a kernel on its own file only: these kernels compile collision.py's,
 # distances.py's, clock.py's and the kinematic core's code into themselves, so a change to those
@@ -150,7 +150,7 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, padding, resolution, goals, l
     new node joins a goal within a step by a certified edge (END_A the node, END_B the
     goal)."""
     n = goals.shape[1]
-    W = np.empty(work_size(M[1], M[3], n))
+    W = new_work(M, n)
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
     start_tree = counters[SIDE] * 0                   # 0, not a literal: one _extend compiled
@@ -196,7 +196,7 @@ def grow_connect(stop, margin, step, goal_bias, gamma, padding, resolution, goal
     new node; the trees swap (tree 0 from the start, tree 1 from the goals; END_A and END_B
     the nodes where they met)."""
     n = goals.shape[1]
-    W = np.empty(work_size(M[1], M[3], n))
+    W = new_work(M, n)
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
     while counters[ITERATIONS] < stop:
@@ -236,7 +236,7 @@ def grow_star(stop, margin, step, goal_bias, gamma, padding, resolution, goals, 
     the child / sibling lists); it runs to stop, keeping the cheapest node joined to a goal
     (best[0] its cost, END_A the node, END_B the goal)."""
     n = goals.shape[1]
-    W = np.empty(work_size(M[1], M[3], n))
+    W = new_work(M, n)
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
     dist = np.empty(capacity)
@@ -370,7 +370,7 @@ def shortcut_kernel(P, tries, min_gain, rng, padding, resolution, queue, M, coun
     checked added to counters[0]. A piece of a certified edge is certified: the spliced ends
     need no check."""
     n = P.shape[1]
-    W = np.empty(work_size(M[1], M[3], n))
+    W = new_work(M, n)
     cap = P.shape[0] + tries + 2
     p = np.empty((cap, n))
     k = P.shape[0]
