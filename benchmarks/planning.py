@@ -38,13 +38,12 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-import mbm  # noqa: E402
+import mbm
 
-import armkit  # noqa: E402
-from armkit.jit import set_mode  # noqa: E402
-from armkit.planning import (Box, CollisionChecker, CollisionModel, Scene,  # noqa: E402
-                             default_geometry, plan)
-from armkit.planning.collision import states_kernel  # noqa: E402
+import armkit
+from armkit.jit import set_mode
+from armkit.planning import Box, CollisionChecker, CollisionModel, Scene, default_geometry, plan
+from armkit.planning.collision import states_kernel
 
 TIME_LIMIT = 1.0
 USER_STEP = 0.01        # rad: the user checker's edges (armkit's default) and OMPL's resolution
@@ -261,7 +260,7 @@ def arm_table(arm: str, per_family: int, args) -> None:
     model = CollisionModel(armkit.load_robot(urdf, tip=tip, srdf=srdf))
     build = time.perf_counter() - t
     t = time.perf_counter()
-    model_only = CollisionModel(model.robot)
+    CollisionModel(model.robot)
     model_time = time.perf_counter() - t
     checkers = [CollisionChecker(model, p.scene) for p in problems]
     scene_time = median_time(lambda: CollisionChecker(model, problems[0].scene), 20)

@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 import armkit
-from armkit.planning import CollisionChecker, CollisionModel, Scene, Sphere, default_geometry, \
-    plan
+from armkit.planning import CollisionChecker, CollisionModel, Scene, Sphere, default_geometry, plan
 from armkit.planning.clock import expired, left, paused, paused_after, timer
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -128,7 +127,7 @@ def mbm_problems():
     out = {}
     for arm in ("ur5", "panda"):
         robot, problems = mbm.problems(arm, 1)
-        urdf, srdf, tip = mbm.spherized_urdf(arm)
+        urdf, srdf, _ = mbm.spherized_urdf(arm)
         out[arm] = (robot, problems, mbm.IndependentChecker(urdf, srdf, robot.n))
     return out
 

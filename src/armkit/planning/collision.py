@@ -36,8 +36,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
 from armkit.jit import kernel, numba_threads, prange
-from armkit.kinematics.core import joint_count, joint_kind, joint_value, link_at, move, \
-    pose_start, pre_at, then
+from armkit.kinematics.core import (
+    joint_count,
+    joint_kind,
+    joint_value,
+    link_at,
+    move,
+    pose_start,
+    pre_at,
+    then,
+)
 from armkit.kinematics.forward import fk_frames
 from armkit.model.robot import Robot, joint_array
 from armkit.planning.clock import clock_gettime, expired, timer

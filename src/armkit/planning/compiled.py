@@ -23,8 +23,14 @@ from numpy.typing import NDArray
 
 from armkit.jit import kernel
 from armkit.planning.clock import clock_gettime, expired, left, paused, paused_after
-from armkit.planning.collision import FREE, QUEUE_SIZE, TIMED_OUT, CollisionChecker, edge_free, \
-    new_work
+from armkit.planning.collision import (
+    FREE,
+    QUEUE_SIZE,
+    TIMED_OUT,
+    CollisionChecker,
+    edge_free,
+    new_work,
+)
 
 # numba's cache keys a kernel on its own file only: these kernels compile collision.py's,
 # distances.py's, clock.py's and the kinematic core's code into themselves, so a change to those

@@ -29,7 +29,7 @@ from armkit.planning.compiled import plan_compiled
 from armkit.planning.planners import planner_named
 from armkit.planning.rrt import ValidityFunction
 from armkit.planning.scene import Scene
-from armkit.planning.smooth import path_length, resample, resample_keeping_vertices, shortcut
+from armkit.planning.smooth import resample, resample_keeping_vertices, shortcut
 from armkit.spatial import as_transform
 
 JOINT_STEP = 0.01       # rad (or m): a validity function's edges are checked this finely
