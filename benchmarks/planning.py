@@ -1,32 +1,33 @@
-"""Collision-free planning: armkit's compiled checker and planners beside a plain NumPy checker
-and OMPL's planners (the `ompl` package) given a Python callback to the same checker.
+"""Collision-free planning on MotionBenchMaker-style problems: armkit (its compiled checker, and a
+user's Python checker) beside OMPL given the same Python checker, with VAMP's figure as
+published; the checker's cost per state; plan()'s overhead and the model's build; the time
+limit kept from a fresh process; the shelf of earlier runs.
 
-    python benchmarks/planning.py            # 100 seeds per scene and planner
-    python benchmarks/planning.py --quick    # 10 seeds, fewer checker rounds
-    python benchmarks/planning.py --armkit-only    # without the OMPL rows
-    python benchmarks/planning.py --checker-only   # the checker's figures and first call only
+    python benchmarks/planning.py                 # 15 problems per family and arm
+    python benchmarks/planning.py --quick         # 3 per family
+    python benchmarks/planning.py --armkit-only   # without OMPL's rows
+    python benchmarks/planning.py --before DIR    # also the code in DIR (a checkout) "before"
 
-Scenes (inspection_6dof, one capsule per link between consecutive DH frame origins, 40 mm):
-- shelf: issue 15's shelf (three plates and a back wall), start in the lower compartment, goal
-  in the upper one; 28 % of the straight joint line collides.
-- window: a wall at x = 600-640 mm with a 340 x 340 mm window; the tool starts low beside the
-  wall and must reach through the window to x = 950 mm (a narrow passage: RRT-Connect needs
-  hundreds of iterations).
-- bookshelf: a UR5 (armkit's built-in ur5, default capsules of 40 mm) among a bookshelf like
-  MotionBenchMaker's (examples/bookshelf.scene.yaml: three plates, side walls, a back, four
-  cylinders); tool from the lower compartment to the upper one (`--bookshelf-only` runs it alone).
+Problems: benchmarks/mbm.py (six families, UR5 and Panda of example-robot-data as spherized
+URDFs with their SRDFs). Each call gets a 1 s time limit. armkit native: `plan(checker, start,
+goal)` with a checker built on a prebuilt `CollisionModel` (RRT-Connect, shortcutting, every
+edge certified). armkit Python checker: `plan(f, start, goal, limits=...)` with ``f(Q) =
+checker.valid(Q)`` (edges sampled every 0.01 rad on the largest joint, shortcut, all in
+Python). OMPL: RRTConnect on a RealVectorStateSpace, the same function called per state, at
+the same resolution (0.01 rad along the joint-space segment), then `simplifySolution`.
+Columns: solved within the limit, median and 90th percentile time of the whole call (planning
+and shortcutting / simplification, from Python), states checked, path length (joint space,
+rad), and paths found in collision by the independent checker of benchmarks/mbm.py (Pinocchio's
+forward kinematics, states 0.005 rad apart).
 
-armkit certifies at r = 5 mm (every configuration on a returned path keeps r / 2 from the
-obstacles). OMPL checks states with the same verdict (free distance > r) at two resolutions:
-its default (1 % of the joint-space extent, "coarse") and "safe", the joint step that keeps
-every point of the arm within r between checks (r / |w|_2, w the displacement weights).
-Every returned path (after shortcutting / simplification) is densified to 0.002 rad and each
-state's exact clearance computed: "dense fails" counts paths found in collision.
+The machine is shared: every time is printed with a reference measured in the same run, and the
+load average beside it.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import subprocess
 import sys
@@ -35,361 +36,353 @@ import time
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+import mbm
+
 import armkit
 from armkit.jit import set_mode
-from armkit.planning import Box, CollisionChecker, Scene, default_geometry, plan
+from armkit.planning import Box, CollisionChecker, CollisionModel, Scene, default_geometry, plan
 from armkit.planning.collision import states_kernel
 
+TIME_LIMIT = 1.0
+USER_STEP = 0.01        # rad: the user checker's edges (armkit's default) and OMPL's resolution
 MM = 1e-3
-R = 0.005
 SHELF = (np.array([0.5567789, -1.5882119, 1.3545770, -2.3713940, 2.2182614, -2.4618970]),
          np.array([-0.8764912, -0.4068011, -1.3528886, 1.6921273, -0.9314323, 2.2978917]))
-WINDOW = (np.array([-1.2638286, -0.4424211, -0.8906291, -0.2377461, 1.5707963, 0.3069677]),
-          np.array([-0.3398369, -1.7227862, 1.7112577, 0.0115285, -1.2309594, 1.5707963]))
-
-
-def box(lo, hi) -> Box:
-    return Box.from_bounds(np.array(lo) * MM, np.array(hi) * MM)
+VAMP = ("VAMP (published: Thomason, Kingston, Kavraki, ICRA 2024; the median of 61 us on "
+        "these MotionBenchMaker Panda problems is issue 28's measurement on this machine)")
 
 
 def shelf() -> Scene:
+    """Issue 15's shelf: three plates and a back wall (inspection_6dof)."""
+    def box(lo, hi):
+        return Box.from_bounds(np.array(lo) * MM, np.array(hi) * MM)
     return Scene([box([650, -500, z0], [1100, 500, z1]) for z0, z1 in
-                  ((200, 240), (560, 600), (920, 960))] + [box([1100, -500, 0], [1140, 500, 1000])])
+                  ((200, 240), (560, 600), (920, 960))] + [box([1100, -500, 0],
+                                                               [1140, 500, 1000])])
 
 
-def window() -> Scene:
-    return Scene([box([600, -800, 0], [640, 800, 430]), box([600, -800, 770], [640, 800, 1400]),
-                  box([600, -800, 430], [640, -170, 770]), box([600, 170, 430], [640, 800, 770])])
-
-
-# --- plain NumPy exact checker (boxes and self pairs), vectorised over states ------------------
-
-def numpy_segments(robot, geometry, Q):
+def numpy_sphere_clearance(robot, geometry, scene, Q):
+    """A plain NumPy reference for a sphere model: every sphere placed by `fk_frames`, every
+    box and cylinder by closed forms, every tested pair; (k,)."""
     F = armkit.fk_frames(robot, Q)[:, geometry.link]
-    A = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.a) + F[..., :3, 3]
-    B = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.b) + F[..., :3, 3]
-    return A, B
-
-
-def numpy_segment_box(P, D, h):
-    """Exact distance from segments P + t D (..., 3) to the box |x| <= h (3,): the squared
-    distance is quadratic between the crossings of the face planes."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cross = np.concatenate([(-h - P) / D, (h - P) / D], axis=-1)
-    cross = np.where((cross > 0) & (cross < 1), cross, 1.0)
-    ts = np.sort(np.concatenate([np.zeros(P.shape[:-1] + (1,)), cross,
-                                 np.ones(P.shape[:-1] + (1,))], axis=-1), axis=-1)
-    t0, t1 = ts[..., :-1], ts[..., 1:]                                   # (..., 7)
-    x = P[..., None, :] + 0.5 * (t0 + t1)[..., None] * D[..., None, :]   # (..., 7, 3)
-    above, below = x > h, x < -h
-    alpha = np.where(above, P[..., None, :] - h, np.where(below, -h - P[..., None, :], 0.0))
-    beta = np.where(above, D[..., None, :], np.where(below, -D[..., None, :], 0.0))
-    qa, qb, qc = (beta ** 2).sum(-1), (2 * alpha * beta).sum(-1), (alpha ** 2).sum(-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(qa > 0, np.clip(-qb / (2 * qa), t0, t1), np.where(qb >= 0, t0, t1))
-    return np.sqrt(np.maximum(((qa * t + qb) * t + qc).min(-1), 0))
-
-
-def numpy_segment_segment(a, b, c, e):
-    d1, d2, r = b - a, e - c, a - c
-    A, E, F = (d1 * d1).sum(-1), (d2 * d2).sum(-1), (d2 * r).sum(-1)
-    C, Bd = (d1 * r).sum(-1), (d1 * d2).sum(-1)
-    den = A * E - Bd * Bd
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(den > 1e-14 * A * E, np.clip((Bd * F - C * E) / den, 0, 1), 0.0)
-        t = (Bd * s + F) / E
-        s = np.where(t < 0, np.clip(-C / A, 0, 1), np.where(t > 1, np.clip((Bd - C) / A, 0, 1), s))
-    t = np.clip(t, 0, 1)
-    return np.linalg.norm(a + d1 * s[..., None] - c - d2 * t[..., None], axis=-1)
-
-
-def numpy_free_distance(robot, geometry, scene, Q):
-    """min(obstacle gaps, self gaps / 2) per state (N,), boxes only."""
-    A, B = numpy_segments(robot, geometry, Q)
+    P = np.einsum("smij,mj->smi", F[..., :3, :3], geometry.a) + F[..., :3, 3]
     best = np.full(len(Q), np.inf)
     for o in scene:
-        Rm, p = o.pose[:3, :3], o.pose[:3, 3]
-        P, E = (A - p) @ Rm, (B - p) @ Rm
-        d = numpy_segment_box(P, E - P, o.size / 2) - geometry.radius
-        best = np.minimum(best, d.min(axis=1))
-    for i, j in geometry.self_pairs():
-        gap = numpy_segment_segment(A[:, i], B[:, i], A[:, j], B[:, j]) - \
-            geometry.radius[i] - geometry.radius[j]
-        best = np.minimum(best, gap / 2)
-    return best
+        x = (P - o.pose[:3, 3]) @ o.pose[:3, :3]
+        if isinstance(o, Box):
+            d = np.linalg.norm(np.maximum(np.abs(x) - o.size / 2, 0), axis=-1)
+        else:
+            d = np.hypot(np.maximum(np.hypot(x[..., 0], x[..., 1]) - o.radius, 0),
+                         np.maximum(np.abs(x[..., 2]) - o.length / 2, 0))
+        best = np.minimum(best, (d - geometry.radius).min(axis=1))
+    pairs = geometry.self_pairs()
+    i, j = pairs[:, 0], pairs[:, 1]
+    gap = np.linalg.norm(P[:, i] - P[:, j], axis=-1) - geometry.radius[i] - geometry.radius[j]
+    return np.minimum(best, gap.min(axis=1) / 2)
 
 
-# --- timing helpers ----------------------------------------------------------------------------
-
-def rounds(f, count):
-    out = []
-    for _ in range(count):
+def median_time(f, rounds):
+    times = []
+    for _ in range(rounds):
         t = time.perf_counter()
         f()
-        out.append(time.perf_counter() - t)
-    return np.array(out)
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
 
 
-def mmm(x, scale=1.0, fmt="{:.3g}"):
-    x = np.asarray(x) * scale
-    return "/".join(fmt.format(v) for v in (x.min(), np.median(x), x.max()))
+# --- the checker per state ---------------------------------------------------------------------
 
-
-def first_call_compile(mode: str) -> str:
-    """The checker's first call, then the first plan() on the shelf (RRT-Connect, shortcut),
-    then the first batch of 20,000 states on every core (the parallel batch kernel), in a fresh
-    process with an empty numba cache, then with the cache filled: wall time and this
-    process's CPU time (the machine is shared). mode: `armkit.jit`'s ("auto": the first state
-    and plan run as Python; "compiled": what compiling them costs)."""
-    code = ("import os, sys, time; import numpy as np, armkit; "
-            f"sys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r}); "
-            "from planning import shelf, SHELF, R; "
-            "from armkit.planning import CollisionChecker, default_geometry, plan; "
-            "r=armkit.robot('inspection_6dof'); armkit.fk_frames(r, np.zeros((2, 6))); "
-            "c=CollisionChecker(r, shelf(), default_geometry(r, 0.04), R); "
-            "Q=np.random.default_rng(0).uniform(r.lower, r.upper, (20000, 6)); "
-            "t=time.perf_counter(); p=time.process_time(); c.valid(np.zeros(6)); "
-            "t1=time.perf_counter(); p1=time.process_time(); plan(c, *SHELF, seed=0); "
-            "t2=time.perf_counter(); p2=time.process_time(); "
-            "armkit.set_num_threads(os.cpu_count()); c.valid(Q); "
-            "print(f'{t1-t:.2f} {p1-p:.2f} {t2-t1:.2f} {p2-p1:.2f} "
-            "{time.perf_counter()-t2:.2f} {time.process_time()-p2:.2f}')")
-    with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache, ARMKIT_JIT=mode)
-        cold = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
-                              text=True).stdout.split()
-        warm = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
-                              text=True).stdout.split()
-    return (f"ARMKIT_JIT={mode}, empty numba cache: checker's first call {cold[0]} s wall, {cold[1]} s CPU; "
-            f"then the first plan() {cold[2]} s wall, {cold[3]} s CPU; then the first batch "
-            f"on {os.cpu_count()} threads {cold[4]} s wall, {cold[5]} s CPU. From the cache: "
-            f"{warm[0]} s / {warm[1]} s, {warm[2]} s / {warm[3]} s and {warm[4]} s / {warm[5]} s")
-
-
-# --- checker throughput ------------------------------------------------------------------------
-
-def checker_figures(checker, quick):
-    robot, geometry, scene = checker.robot, checker.geometry, checker.scene
-    Q = np.random.default_rng(0).uniform(robot.lower, robot.upper, (200_000, 6))
+def checker_figures(arm: str, problem, model, quick: bool) -> None:
+    robot = model.robot
+    checker = CollisionChecker(model, problem.scene)
+    Q = np.random.default_rng(0).uniform(*robot.chain.sampling_limits,
+                                          (20_000 if quick else 100_000, robot.n))
     out = np.empty(len(Q))
-    F, I = checker.model
-    flat = Q.reshape(-1)
-    cap = R * (1 + 1e-9) + 1e-12
-    states_kernel(flat[:60], F, I, R, cap, out[:10])
-    batch = rounds(lambda: states_kernel(flat, F, I, R, cap, out), 3 if quick else 5)
-    exact = rounds(lambda: states_kernel(flat, F, I, -np.inf, np.inf, out), 3 if quick else 5)
-    Qn = Q[:20_000]
-    ref = numpy_free_distance(robot, geometry, scene, Qn)
-    states_kernel(Qn.reshape(-1), F, I, -np.inf, np.inf, out[:len(Qn)])
-    agree = np.abs(ref - out[:len(Qn)]).max()
-    numpy_batch = rounds(lambda: numpy_free_distance(robot, geometry, scene, Qn), 3)
-    single = Q[:5000]
-    t_valid = rounds(lambda: [checker.valid(q) for q in single], 3) / len(single)
-    none = np.empty(0)
-    t_kernel = rounds(lambda: [states_kernel(q, F, I, R, cap, none) for q in single],
-                      3) / len(single)
-    t_numpy1 = rounds(lambda: [numpy_free_distance(robot, geometry, scene, q[None])
-                               for q in single[:500]], 3) / 500
-    auto = armkit.get_num_threads()
-    public = rounds(lambda: checker.valid(Q), 3 if quick else 5)
-    cores = os.cpu_count()
-    armkit.set_num_threads(cores)
-    try:
-        checker.valid(Q[:20_000])
-        spread = rounds(lambda: checker.valid(Q), 3 if quick else 5)
-        spread_exact = rounds(lambda: checker.clearance(Q), 3 if quick else 5)
-    finally:
-        armkit.set_num_threads(None)
-    print("\n## Checker: inspection_6dof capsules against the shelf, states per second "
-          "(min/median/max over rounds)")
-    print(f"compiled batch, verdict at r = 5 mm : {mmm(len(Q) / batch, fmt='{:,.0f}')}"
-          "   (the kernel on one thread)")
-    print(f"compiled batch, exact free distance : {mmm(len(Q) / exact, fmt='{:,.0f}')}"
-          "   (the kernel on one thread)")
-    print(f"checker.valid(Q), armkit's threads  : {mmm(len(Q) / public, fmt='{:,.0f}')}"
-          f"   (armkit.get_num_threads() {auto} before the rounds)")
-    print(f"checker.valid(Q), {cores} threads         : {mmm(len(Q) / spread, fmt='{:,.0f}')}"
-          f"   (armkit.set_num_threads({cores}))")
-    print(f"checker.clearance(Q), {cores} threads     : "
-          f"{mmm(len(Q) / spread_exact, fmt='{:,.0f}')}")
-    print(f"plain NumPy exact, batch            : {mmm(len(Qn) / numpy_batch, fmt='{:,.0f}')}"
-          f"   (largest difference from compiled {agree:.1e} m)")
-    print(f"ratio batch verdict / NumPy         : "
-          f"{np.median(len(Q) / batch) / np.median(len(Qn) / numpy_batch):.0f}x (one thread), "
-          f"{np.median(len(Q) / spread) / np.median(len(Qn) / numpy_batch):.0f}x "
-          f"({cores} threads)")
-    print(f"one state from Python, us: checker.valid(q) {mmm(t_valid, 1e6)}; kernel call "
-          f"{mmm(t_kernel, 1e6)}; NumPy {mmm(t_numpy1, 1e6)}")
+    states_kernel(Q[:10], checker.arrays, 0.0, 1e-12, out[:10])
+    rounds = 3 if quick else 5
+    verdict = median_time(lambda: states_kernel(Q, checker.arrays, 0.0, 1e-12, out), rounds)
+    exact = median_time(lambda: states_kernel(Q, checker.arrays, -np.inf, np.inf, out), rounds)
+    Qn = Q[:5000]
+    ref = numpy_sphere_clearance(robot, model.geometry, problem.scene, Qn)
+    agree = np.abs(np.minimum(ref, 1) - np.minimum(checker.clearance(Qn), 1)).max()
+    numpy_t = median_time(lambda: numpy_sphere_clearance(robot, model.geometry, problem.scene,
+                                                        Qn), 3)
+    k = robot.chain.kernel
+    fk_out = np.empty((len(Q), 4, 4))
+    from armkit.kinematics.core import poses
+    poses(Q[:10], k.floats, k.ints, fk_out[:10])
+    fk_t = median_time(lambda: poses(Q, k.floats, k.ints, fk_out), rounds)
+    print(f"\n## Checker per state: {arm}, {len(model.geometry)} spheres on "
+          f"{len(set(model.geometry.names))} links ({model.link_pairs} link pairs, "
+          f"{model.part_pairs} sphere pairs tested), {problem.family} with "
+          f"{len(problem.scene)} obstacles; {len(Q):,} random states, one thread")
+    print(f"verdict (clearance > 0): {verdict / len(Q) * 1e6:.3f} us/state "
+          f"({np.mean(out > 0) * 100:.0f} % valid)")
+    print(f"exact clearance:         {exact / len(Q) * 1e6:.3f} us/state")
+    print(f"reference, the tool pose alone (armkit.kinematics.core.poses): "
+          f"{fk_t / len(Q) * 1e6:.3f} us/state -> verdict / pose {verdict / fk_t:.2f}")
+    print(f"reference, plain NumPy sphere checker: {numpy_t / len(Qn) * 1e6:.2f} us/state -> "
+          f"{numpy_t / len(Qn) / (exact / len(Q)):.0f}x the exact clearance (largest "
+          f"difference {agree:.1e} m)")
 
 
-# --- planning ----------------------------------------------------------------------------------
+BEFORE = r"""
+import sys, time, numpy as np, armkit
+from armkit.jit import set_mode
+set_mode("compiled")
+from armkit.planning import Box, CollisionChecker, Scene
+from armkit.kinematics.core import poses
+robot = armkit.load_robot(sys.argv[1], tip=sys.argv[2])
+boxes = np.load(sys.argv[3])
+scene = Scene([Box(b[:3], b[3:].reshape(4, 4)) for b in boxes])
+Q = np.random.default_rng(0).uniform(*robot.chain.sampling_limits, (20000, robot.n))
+c = CollisionChecker(robot, scene, resolution=1e-9)
+c.valid(Q[:10]); c.clearance(Q[:10])
+k = robot.chain.kernel; out = np.empty((len(Q), 4, 4)); poses(Q[:5], k.floats, k.ints, out[:5])
+def t(f):
+    ts = []
+    for _ in range(5):
+        s = time.perf_counter(); f(); ts.append(time.perf_counter() - s)
+    return float(np.median(ts)) / len(Q) * 1e6
+armkit.set_num_threads(1)
+print(t(lambda: c.valid(Q)), t(lambda: c.clearance(Q)), t(lambda: poses(Q, k.floats, k.ints, out)))
+"""
 
-def dense_fails(checker, path) -> bool:
-    path = np.asarray(path)
-    Q = [path[:1]]
-    for a, b in zip(path[:-1], path[1:]):
-        k = max(int(np.ceil(np.abs(b - a).max() / 0.002)), 1)
-        Q.append(a + (np.arange(1, k + 1) / k)[:, None] * (b - a))
-    return bool((checker.clearance(np.vstack(Q)) <= 0).any())
+
+def before_figures(before: str, arm: str, problem, urdf, tip) -> None:
+    """The per-state figure of the code in `before` (a checkout), on the same spheres (read as
+    URDF sphere primitives, no SRDF: its pairs are armkit's old rule) and obstacles (boxes)."""
+    boxes = np.array([np.r_[o.size, o.pose.reshape(-1)] for o in problem.scene
+                      if isinstance(o, Box)])
+    with tempfile.TemporaryDirectory() as tmp:
+        np.save(os.path.join(tmp, "boxes.npy"), boxes)
+        env = dict(os.environ, PYTHONPATH=os.path.join(before, "src"))
+        run = subprocess.run([sys.executable, "-c", BEFORE, str(urdf), tip,
+                              os.path.join(tmp, "boxes.npy")], env=env, capture_output=True,
+                             text=True)
+    if run.returncode:
+        print(f"before: failed ({run.stderr.strip().splitlines()[-1]})")
+        return
+    valid, exact, pose = (float(x) for x in run.stdout.split())
+    print(f"before ({before}, its boxes only: {len(boxes)}): verdict {valid:.3f} us/state, exact "
+          f"{exact:.3f} us/state, pose {pose:.3f} us/state -> verdict / pose {valid / pose:.2f}")
 
 
-def ours(checker, start, goal, planner, seeds):
-    rows = []
-    for s in seeds:
-        res = plan(checker, start, goal, planner=planner, seed=s, time_limit=30,
-                   max_iterations=300 if planner == "rrtstar" else None)
-        rows.append((res.success, res.planning_time, res.states_checked, res.raw_length,
-                     res.length, res.shortcut_time,
-                     dense_fails(checker, res.path) if res.success else False))
-    return rows
+# --- the problems --------------------------------------------------------------------------------
+
+def armkit_native(checker, p):
+    res = plan(checker, p.start, p.goal, time_limit=TIME_LIMIT, seed=p.index)
+    return res.success, res.total_time, res.states_checked, res.length, res.path, res.reason
 
 
-def ompl_runs(checker, start, goal, planner, seeds, resolution, time_limit):
+def armkit_python(checker, p):
+    calls = [0]
+
+    def valid(Q):
+        calls[0] += len(Q)
+        return checker.valid(Q)
+
+    res = plan(valid, p.start, p.goal, limits=(checker.lower, checker.upper),
+               time_limit=TIME_LIMIT, seed=p.index, resolution=USER_STEP)
+    return res.success, res.total_time, calls[0], res.length, res.path, res.reason
+
+
+def ompl_run(checker, p):
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
 
     ou.setLogLevel(ou.LOG_NONE)
+    ou.RNG.setSeed(int(p.index) + 1)
     n = checker.n
-    rows = []
-    for s in seeds:
-        ou.RNG.setSeed(int(s) + 1)
-        space = ob.RealVectorStateSpace(n)
-        bounds = ob.RealVectorBounds(n)
-        for i in range(n):
-            bounds.setLow(i, float(checker.lower[i]))
-            bounds.setHigh(i, float(checker.upper[i]))
-        space.setBounds(bounds)
-        ss = og.SimpleSetup(space)
-        counter = [0]
+    space = ob.RealVectorStateSpace(n)
+    bounds = ob.RealVectorBounds(n)
+    for i in range(n):
+        bounds.setLow(i, float(checker.lower[i]))
+        bounds.setHigh(i, float(checker.upper[i]))
+    space.setBounds(bounds)
+    ss = og.SimpleSetup(space)
+    calls = [0]
+    q = np.empty(n)
 
-        def valid(state, counter=counter):
-            counter[0] += 1
-            q = np.array([state[i] for i in range(n)])
-            return bool(checker.valid_states(q[None])[0])
-
-        ss.setStateValidityChecker(valid)
-        si = ss.getSpaceInformation()
-        if resolution is not None:
-            si.setStateValidityCheckingResolution(resolution)
-        a, b = space.allocState(), space.allocState()
+    def valid(state):
+        calls[0] += 1
         for i in range(n):
-            a[i], b[i] = float(start[i]), float(goal[i])
-        ss.setStartAndGoalStates(a, b)
-        ss.setPlanner({"rrtconnect": og.RRTConnect, "rrt": og.RRT,
-                       "rrtstar": og.RRTstar}[planner](si))
-        ss.setup()
-        t = time.perf_counter()
-        solved = ss.solve(time_limit)
-        dt = time.perf_counter() - t
-        exact = bool(solved) and ss.haveExactSolutionPath()
-        if not exact:
-            rows.append((False, dt, counter[0], np.nan, np.nan, np.nan, False))
+            q[i] = state[i]
+        return bool(checker.valid(q))
+
+    ss.setStateValidityChecker(valid)
+    si = ss.getSpaceInformation()
+    si.setStateValidityCheckingResolution(USER_STEP / space.getMaximumExtent())
+    a, b = space.allocState(), space.allocState()
+    for i in range(n):
+        a[i], b[i] = float(p.start[i]), float(p.goal[i])
+    ss.setStartAndGoalStates(a, b)
+    ss.setPlanner(og.RRTConnect(si))
+    ss.setup()
+    t = time.perf_counter()
+    solved = ss.solve(TIME_LIMIT)
+    if not (bool(solved) and ss.haveExactSolutionPath()):
+        return False, time.perf_counter() - t, calls[0], math.nan, None, "no exact path"
+    ss.simplifySolution()
+    dt = time.perf_counter() - t
+    path = ss.getSolutionPath()
+    Q = np.array([[path.getState(k)[i] for i in range(n)] for k in range(path.getStateCount())])
+    return True, dt, calls[0], path.length(), Q, "ok"
+
+
+def row(name, runs, independent, problems):
+    ok = np.array([r[0] for r in runs])
+    t = np.array([r[1] for r in runs]) * 1e3
+    states = np.array([r[2] for r in runs])
+    length = np.array([r[3] for r in runs])
+    bad = sum(independent.path_collides(p.scene, r[4]) for r, p in zip(runs, problems) if r[0])
+    if ok.any():
+        print(f"| {name} | {ok.sum()}/{len(ok)} | {np.median(t[ok]):.3g} | "
+              f"{np.percentile(t[ok], 90):.3g} | {np.median(states[ok]):.0f} | "
+              f"{np.median(length[ok]):.3g} | {bad} |")
+    else:
+        print(f"| {name} | 0/{len(ok)} | | | | | |")
+    reasons = {r[5] for r in runs if not r[0]}
+    if reasons:
+        print(f"|   (unsolved: {'; '.join(sorted(reasons))[:150]}) | | | | | | |")
+
+
+def arm_table(arm: str, per_family: int, args) -> None:
+    t = time.perf_counter()
+    robot, problems = mbm.problems(arm, per_family)
+    generated = time.perf_counter() - t
+    urdf, srdf, tip = mbm.spherized_urdf(arm)
+    independent = mbm.IndependentChecker(urdf, srdf, robot.n)
+    t = time.perf_counter()
+    model = CollisionModel(armkit.load_robot(urdf, tip=tip, srdf=srdf))
+    build = time.perf_counter() - t
+    t = time.perf_counter()
+    CollisionModel(model.robot)
+    model_time = time.perf_counter() - t
+    checkers = [CollisionChecker(model, p.scene) for p in problems]
+    scene_time = median_time(lambda: CollisionChecker(model, problems[0].scene), 20)
+    for c, p in zip(checkers, problems[:3]):
+        plan(c, p.start, p.goal, time_limit=60)             # compiled before timing
+    print(f"\n## {arm}: {len(problems)} problems ({per_family} per family, generated in "
+          f"{generated:.1f} s); {len(model.geometry)} spheres, {model.link_pairs} link pairs, "
+          f"{model.part_pairs} sphere pairs; {os.getloadavg()[0]:.1f} load")
+    print(f"model build: spherized URDF and SRDF read and the model built {build * 1e3:.1f} ms "
+          f"(the CollisionModel alone {model_time * 1e3:.1f} ms); a checker for a new scene "
+          f"{scene_time * 1e6:.0f} us")
+    # plan()'s overhead: a problem whose direct edge is free and short, against the kernel
+    # work it does (the same edge certified by one call).
+    p0, c0 = problems[0], checkers[0]
+    q_near = p0.start + 1e-3 * (p0.goal - p0.start) / np.linalg.norm(p0.goal - p0.start)
+    edge = np.vstack([p0.start, q_near])
+    total = median_time(lambda: plan(c0, p0.start, q_near), 200)
+    kernel_only = median_time(lambda: c0.polyline_free(edge), 200)
+    print(f"plan() with a prebuilt model, direct edge: {total * 1e6:.1f} us, of which "
+          f"{kernel_only * 1e6:.1f} us the edge's certification -> overhead "
+          f"{(total - kernel_only) * 1e6:.1f} us")
+    print("\n| planner | solved | median ms | p90 ms | states checked | length (rad) | "
+          "in collision (0.005 rad) |")
+    print("|---|---|---|---|---|---|---|")
+    runs = [armkit_native(c, p) for c, p in zip(checkers, problems)]
+    row("armkit native (RRT-Connect, certified)", runs, independent, problems)
+    by_family = {}
+    for r, p in zip(runs, problems):
+        by_family.setdefault(p.family, []).append(r[1] * 1e3)
+    print("|   per family, median ms: " + ", ".join(f"{f} {np.median(v):.3g}" for f, v in
+                                                     by_family.items()) + " | | | | | | |")
+    runs = [armkit_python(c, p) for c, p in zip(checkers, problems)]
+    row(f"armkit, Python checker ({USER_STEP} rad)", runs, independent, problems)
+    if not args.armkit_only:
+        runs = [ompl_run(c, p) for c, p in zip(checkers, problems)]
+        row(f"OMPL RRTConnect, Python checker ({USER_STEP} rad)", runs, independent, problems)
+    if arm == "panda":
+        print(f"| {VAMP} | | 0.061 | | | | |")
+    checker_figures(arm, next(p for p in problems if p.family == "bookshelf_tall"), model,
+                    args.quick)
+    if args.before:
+        before_figures(args.before, arm,
+                       next(p for p in problems if p.family == "bookshelf_tall"), urdf, tip)
+
+
+# --- the time limit from a fresh process ---------------------------------------------------------
+
+FRESH = r"""
+import sys, time
+sys.path.insert(0, sys.argv[1])
+import numpy as np, armkit, mbm
+from armkit.planning import CollisionChecker, CollisionModel, plan
+robot, problems = mbm.problems(sys.argv[3], 1)
+model = CollisionModel(robot)
+times = []
+for p in problems:
+    checker = CollisionChecker(model, p.scene)
+    t = time.perf_counter()
+    r = plan(checker, p.start, p.goal, time_limit=float(sys.argv[2]))
+    times.append(time.perf_counter() - t)
+    if len(times) == 1:
+        first = (times[0], r.reason.replace(" ", "_"))
+print(first[0], first[1], max(times), len(times))
+"""
+
+
+def fresh_process(limit: float, arm: str) -> None:
+    """plan(time_limit=limit) on one problem of each family, in a fresh process: the first
+    call's time and the longest."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    print(f"\n## The time limit from a fresh process: plan(time_limit={limit}) on one {arm} "
+          f"problem of each family, in turn")
+    for label, empty in (("empty numba cache (the loops run as Python)", True),
+                         ("warm cache", False)):
+        with tempfile.TemporaryDirectory() as cache:
+            env = dict(os.environ)
+            if empty:
+                env["NUMBA_CACHE_DIR"] = cache
+            out = subprocess.run([sys.executable, "-c", FRESH, here, str(limit), arm], env=env,
+                                 capture_output=True, text=True)
+        if out.returncode:
+            print(f"{label}: failed: {out.stderr.strip().splitlines()[-1]}")
             continue
-        checked = counter[0]
-        raw = ss.getSolutionPath().length()
-        t = time.perf_counter()
-        ss.simplifySolution()
-        ts = time.perf_counter() - t
-        p = ss.getSolutionPath()
-        path = np.array([[p.getState(k)[i] for i in range(n)] for k in range(p.getStateCount())])
-        rows.append((True, dt, checked, raw, p.length(), ts, dense_fails(checker, path)))
-    return rows
+        first, reason, longest, count = out.stdout.split()
+        print(f"{label}: the first call returned after {float(first):.4f} s "
+              f"({reason.replace('_', ' ')}); the longest of {count} "
+              f"{float(longest):.4f} s (overrun {(float(longest) - limit) * 1e3:.1f} ms)")
 
 
-def report(name, rows):
-    a = np.array(rows, dtype=float)
-    ok = a[:, 0] > 0
-    if not ok.any():
-        print(f"| {name} | 0 % | | | | | | | |")
-        return
-    t = a[ok, 1] * 1e3
-    print(f"| {name} | {100 * ok.mean():.0f} % | {np.median(t):.3g} | "
-          f"{np.percentile(t, 90):.3g} | {np.median(a[ok, 2]):.0f} | "
-          f"{np.median(a[ok, 3]):.3g} | {np.median(a[ok, 4]):.3g} | "
-          f"{np.median(a[ok, 5]) * 1e3:.3g} | {int(a[ok, 6].sum())} |")
+# --- the shelf -----------------------------------------------------------------------------------
 
-
-BOOKSHELF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "examples",
-                         "bookshelf.scene.yaml")
-
-
-def scene_table(name, checker, start, goal, seeds, args) -> None:
-    """The planners' table for one scene: armkit's three planners, OMPL's at the coarse and the
-    safe resolution (the joint step keeping every point of the arm within r between checks)."""
-    robot = checker.robot
-    extent = float(np.linalg.norm(robot.upper - robot.lower))
-    safe = R / np.linalg.norm(checker.weights) / extent
-    plan(checker, start, goal, seed=0)                           # compiled before timing
-    print(f"\n## {name}: {len(seeds)} seeds; times in ms; lengths joint-space rad")
-    print("| planner | success | median | p90 | states checked | length | shortcut length |"
-          " shortcut ms | dense fails |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for planner in ("rrtconnect", "rrt", "rrtstar"):
-        report(f"armkit {planner} (certified, r = 5 mm)",
-               ours(checker, start, goal, planner, seeds))
-    if args.armkit_only:
-        return
-    report("OMPL RRTConnect, coarse (1 %)",
-           ompl_runs(checker, start, goal, "rrtconnect", seeds, None, 10.0))
-    if not args.no_ompl_safe:
-        report(f"OMPL RRTConnect, safe ({safe:.2g}), 10 s",
-               ompl_runs(checker, start, goal, "rrtconnect", seeds, safe, 10.0))
-    report("OMPL RRT, coarse (1 %), 2 s", ompl_runs(checker, start, goal, "rrt", seeds,
-                                                    None, 2.0))
-    report("OMPL RRTstar, coarse (1 %), 1 s", ompl_runs(checker, start, goal, "rrtstar",
-                                                       seeds, None, 1.0))
-
-
-def bookshelf_table(seeds, args) -> None:
-    """The UR5 among the bookshelf of examples/bookshelf.scene.yaml (its start and goal)."""
-    from armkit.io.scene import read_planning_problem
-    from armkit.planning import arm_geometry
-
-    problem = read_planning_problem(BOOKSHELF)
-    robot = problem.robot
-    checker = CollisionChecker(robot, problem.scene, arm_geometry(robot, problem.radius), R)
-    start, goal = problem.start, problem.goal[0]
-    line = start + np.linspace(0, 1, 10_001)[:, None] * (goal - start)
-    print(f"\nbookshelf: {robot.name}, {len(problem.scene)} obstacles; "
-          f"{100 * np.mean(checker.clearance(line) <= 0):.0f} % of the straight joint line "
-          f"collides")
-    scene_table("bookshelf (UR5)", checker, start, goal, seeds, args)
+def shelf_row(seeds) -> None:
+    robot = armkit.robot("inspection_6dof")
+    checker = CollisionChecker(robot, shelf(), default_geometry(robot, 0.04), resolution=0.005)
+    plan(checker, *SHELF, seed=0)
+    rows = [plan(checker, *SHELF, seed=s) for s in seeds]
+    ok = [r for r in rows if r.success]
+    t = np.array([r.planning_time for r in ok]) * 1e3
+    total = np.array([r.total_time for r in ok]) * 1e3
+    print(f"\n## The shelf (inspection_6dof, 40 mm capsules, resolution 5 mm): RRT-Connect, "
+          f"{len(rows)} seeds: {len(ok)} solved; planning median {np.median(t):.3g} ms, p90 "
+          f"{np.percentile(t, 90):.3g} ms; whole call median {np.median(total):.3g} ms; states "
+          f"{np.median([r.states_checked for r in ok]):.0f}; length "
+          f"{np.median([r.length for r in ok]):.3g} rad")
 
 
 def main() -> None:
-    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="10 seeds, fewer rounds")
-    parser.add_argument("--seeds", type=int, default=None, help="seeds per planner (100)")
-    parser.add_argument("--no-ompl-safe", action="store_true",
-                        help="skip OMPL at the safe resolution (slow)")
-    parser.add_argument("--bookshelf-only", action="store_true",
-                        help="only the UR5 bookshelf scene")
-    parser.add_argument("--armkit-only", action="store_true",
-                        help="armkit's rows only (no OMPL runs)")
-    parser.add_argument("--checker-only", action="store_true",
-                        help="the checker's throughput and first call only")
+    parser.add_argument("--quick", action="store_true", help="3 problems per family")
+    parser.add_argument("--per-family", type=int, default=None)
+    parser.add_argument("--armkit-only", action="store_true", help="no OMPL rows")
+    parser.add_argument("--arms", default="ur5,panda")
+    parser.add_argument("--before", default=None,
+                        help="a checkout of the code before, for the per-state figure")
     args = parser.parse_args()
-    seeds = range(args.seeds or (10 if args.quick else 100))
     print(f"load average at start: {os.getloadavg()}")
-    if args.bookshelf_only:
-        bookshelf_table(seeds, args)
-        print(f"\nload average at end: {os.getloadavg()}")
-        return
-    robot = armkit.robot("inspection_6dof")
-    geometry = default_geometry(robot, 0.04)
-    for mode in ("auto", "compiled"):
-        print(first_call_compile(mode))
-    checker_figures(CollisionChecker(robot, shelf(), geometry, R), args.quick)
-    if args.checker_only:
-        print(f"\nload average at end: {os.getloadavg()}")
-        return
-    for scene_name, scene, (start, goal) in (("shelf", shelf(), SHELF),
-                                             ("window", window(), WINDOW)):
-        scene_table(scene_name, CollisionChecker(robot, scene, geometry, R), start, goal, seeds,
-                    args)
-    bookshelf_table(seeds, args)
+    fresh_process(0.2, "panda")
+    set_mode("compiled")        # compiled speed from the first call (armkit.jit)
+    per_family = args.per_family or (3 if args.quick else 15)
+    for arm in args.arms.split(","):
+        arm_table(arm, per_family, args)
+    shelf_row(range(20 if args.quick else 100))
     print(f"\nload average at end: {os.getloadavg()}")
 
 

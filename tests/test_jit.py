@@ -258,7 +258,7 @@ def results():
         solutions = armkit.ik_solutions(ur5, pose_from_xyz_rpy([0.4, 0.1, z], [np.pi, 0.2, 0.0]))
         out[f"ik_solutions {i}"] = solutions.q
     for planner in ("rrtconnect", "rrt"):
-        r = armkit.plan("inspection_6dof", SHELF_START, SHELF_GOAL, scene=shelf(),
+        r = armkit.plan(armkit.robot("inspection_6dof"), SHELF_START, SHELF_GOAL, scene=shelf(),
                         planner=planner, seed=3, waypoints=10)
         out[f"plan {planner}"] = np.r_[r.path.ravel(), r.iterations, r.states_checked]
     q0, qf = np.zeros(6), np.array([1.0, -0.5, 0.3, 2.0, -1.0, 0.1])

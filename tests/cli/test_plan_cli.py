@@ -23,7 +23,7 @@ def armkit_cli(*args):
 
 def test_shelf_json_in_degrees_and_figure(tmp_path):
     run = armkit_cli("plan", SHELF, "--json", "--seed", "3", "--waypoints", "8",
-                     "--out", str(tmp_path / "fig"))
+                     "--out", str(tmp_path / "fig"), "--time-limit", "600")
     assert run.returncode == 0, run.stderr
     doc = json.loads(run.stdout)
     assert doc["success"] and doc["reason"] == "ok" and doc["planner"] == "rrtconnect"
@@ -41,7 +41,7 @@ def test_shelf_json_in_degrees_and_figure(tmp_path):
 
 
 def test_table_output_and_planner_option():
-    run = armkit_cli("plan", SHELF, "--planner", "rrt", "--seed", "1")
+    run = armkit_cli("plan", SHELF, "--planner", "rrt", "--seed", "1", "--time-limit", "600")
     assert run.returncode == 0, run.stderr
     assert "rrt: path found" in run.stdout and "q6 (deg)" in run.stdout
 
@@ -60,11 +60,20 @@ def test_no_path_exits_1_with_the_reason(tmp_path):
     assert run.returncode == 1 and "goal in collision" in run.stdout
 
 
+def test_a_time_limit_of_zero_is_a_reason():
+    run = armkit_cli("plan", SHELF, "--time-limit", "0", "--json")
+    assert run.returncode == 1, run.stderr
+    doc = json.loads(run.stdout)
+    assert not doc["success"] and "time limit" in doc["reason"]
+
+
 def test_bad_input_one_line_exit_2(tmp_path):
     cases = [
         (["plan", str(tmp_path / "missing.yaml")], "missing.yaml"),
         (["plan", SHELF, "--planner", "prm"], "--planner: expected one of"),
         (["plan", SHELF, "--waypoints", "1"], "--waypoints: expected a whole number >= 2"),
+        (["plan", SHELF, "--time-limit", "-1"], "--time-limit: expected seconds >= 0"),
+        (["plan", SHELF, "--time-limit", "nan"], "--time-limit: expected seconds >= 0"),
     ]
     bad = tmp_path / "bad.yaml"
     bad.write_text("units: {length: mm, angle: deg}\nobstacles:\n  - {type: cone}\n")

@@ -40,12 +40,13 @@ def test_collisions_are_placed_on_their_chain_links(arm):
     assert not found["l1", 0].T.flags.writeable
 
 
-def test_a_mesh_is_kept_without_reading_its_file(arm, tmp_path):
+def test_a_mesh_whose_file_is_missing_is_kept_unread(arm, tmp_path):
     path = tmp_path / "mesh.urdf"
     path.write_text(ARM.replace('<sphere radius="0.03"/>',
-                                '<mesh filename="package://missing/l2.stl" scale="1 1 1"/>'))
+                                '<mesh filename="package://missing/l2.stl" scale="1 2 1"/>'))
     (c,) = [c for c in read_urdf(path, tip=TIP).collisions if c.link == "l2"]
-    assert c.kind == "mesh" and c.size.shape == (0,)
+    assert c.kind == "mesh" and c.size.tolist() == [1, 2, 1] and c.vertices is None
+    assert "was not found" in c.note
 
 
 WHERE_L1 = "link 'l1' <collision>[0]"

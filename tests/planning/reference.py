@@ -114,3 +114,12 @@ def dense_gaps(robot, geometry, scene, path, step: float = 0.002, points: int = 
             D = np.linalg.norm(Pi[:, None] - Pj[None], axis=-1).min()
             self_gap = min(self_gap, float(D - geometry.radius[i] - geometry.radius[j]))
     return obstacle_gap, self_gap, len(Q)
+
+
+def dense_ok(checker, path, step: float = 0.002, points: int = 60) -> bool:
+    """The independent check of a planned path: every `step` rad along it, each sampled
+    configuration keeps more than the checker's padding from every obstacle, and twice it
+    between the arm's tested parts (what certification promises)."""
+    obstacle_gap, self_gap, _ = dense_gaps(checker.robot, checker.geometry, checker.scene, path,
+                                           step=step, points=points)
+    return obstacle_gap > checker.padding and self_gap > 2 * checker.padding

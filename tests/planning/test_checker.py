@@ -32,7 +32,9 @@ def test_checker_matches_reference_on_random_states(name):
     found = checker.clearance(Q)
     expected = np.array([reference.free_distance(robot, geometry, scene, q) for q in Q])
     np.testing.assert_allclose(found, expected, atol=1e-7)
-    np.testing.assert_array_equal(checker.valid(Q), expected > 0.005)
+    np.testing.assert_array_equal(checker.valid(Q), expected > 0)
+    padded = CollisionChecker(robot, scene, geometry, padding=0.01)
+    np.testing.assert_array_equal(padded.valid(Q), expected > 0.01)
     assert checker.clearance(Q[0]).shape == () and checker.valid(Q.reshape(3, 4, -1)).shape == (3, 4)
 
 
@@ -80,11 +82,15 @@ def test_displacement_bound_holds(name):
         assert moved <= w @ np.abs(q1 - q0) + 1e-12
 
 
-def test_certified_edges_keep_half_the_resolution_between_checks():
+@pytest.mark.parametrize("padding", [0.0, 0.01])
+def test_certified_edges_keep_the_padding_between_checks(padding):
+    """Every configuration of a certified edge, between its checked states too, keeps more
+    than the padding from the obstacles (twice it between the arm's parts): the independent
+    dense check."""
     robot = armkit.robot("inspection_6dof")
     geometry = default_geometry(robot, 0.04)
     scene = shelf()
-    checker = CollisionChecker(robot, scene, geometry, resolution=0.01)
+    checker = CollisionChecker(robot, scene, geometry, resolution=0.002, padding=padding)
     Q = random_q(robot, 300, seed=5)
     Q = Q[checker.valid(Q)]
     accepted = 0
@@ -95,10 +101,31 @@ def test_certified_edges_keep_half_the_resolution_between_checks():
             accepted += 1
             obstacle_gap, self_gap, _ = reference.dense_gaps(robot, geometry, scene, [qa, qb],
                                                              points=60)
-            assert obstacle_gap >= 0.005 - 1e-12 and self_gap >= 0.01 - 1e-12
+            assert obstacle_gap > padding and self_gap > 2 * padding
         if accepted == 8:
             break
     assert accepted == 8
+
+
+def test_a_tiny_clearance_is_valid_and_its_edges_check_finely():
+    """Validity is apart from certification: a state 0.5 mm from a plate is valid; an edge
+    from it certifies with more states than one far from everything, and one too close for
+    the resolution fails."""
+    robot = armkit.robot("inspection_6dof")
+    checker = CollisionChecker(robot, shelf(), default_geometry(robot, 0.04), resolution=1e-4)
+    line = SHELF_START + np.linspace(0, 1, 4001)[:, None] * (SHELF_GOAL - SHELF_START)
+    f = checker.clearance(line)
+    k = int(np.argmax(f <= 0)) - 1                   # the last free state before the plate
+    near = line[k]
+    assert 0 < f[k] < 0.003 and checker.valid(near)
+    back = line[k - 200]
+    free, near_states = checker.edge_valid(back, near)
+    assert free
+    far = back - 0.05 * (SHELF_GOAL - SHELF_START)
+    assert checker.edge_valid(far, back)[0]
+    assert near_states > checker.edge_valid(far, back)[1]
+    coarse = CollisionChecker(robot, shelf(), default_geometry(robot, 0.04), resolution=0.05)
+    assert coarse.valid(near) and not coarse.edge_valid(back, near)[0]
 
 
 def test_robot_file_collision_section(tmp_path):
@@ -160,70 +187,12 @@ def test_checker_bad_input():
     robot = armkit.robot("ur5")
     with pytest.raises(InputError, match="resolution"):
         CollisionChecker(robot, Scene(), resolution=0)
+    for bad in (-0.01, float("nan"), "1"):
+        with pytest.raises(InputError, match="padding: expected a non-negative length"):
+            CollisionChecker(robot, Scene(), padding=bad)
     with pytest.raises(InputError, match="scene"):
         CollisionChecker(robot, [1, 2])
     with pytest.raises(InputError, match="links 0 .. 6"):
         CollisionChecker(robot, Scene(), ArmGeometry([9], [[0, 0, 0]], [[0, 0, 0]], [0.1]))
     with pytest.raises(InputError, match="expected last axis 6"):
         CollisionChecker(robot).valid([0, 0, 0])
-
-
-def test_kernel_sine_cosine_within_one_ulp_of_libm():
-    """The checker's inlined sine and cosine (range reduction and polynomials) against the C
-    library's, at angles near the reduction's quadrant edges, small, large and huge."""
-    import math
-
-    from armkit.planning.collision import sin_cos
-
-    rng = np.random.default_rng(4)
-    edges = np.arange(-40, 41) * (np.pi / 4)
-    x = np.concatenate([rng.uniform(-7, 7, 3000), rng.uniform(-1e5, 1e5, 500),
-                        edges, np.nextafter(edges, 0), np.nextafter(edges, 9),
-                        [0.0, -0.0, 1e-300, 5e-9, 1e6, -3e7, 1e300]])
-    for v in x:
-        s, c = sin_cos(v)
-        ls, lc = math.sin(v), math.cos(v)
-        assert abs(s - ls) <= np.spacing(abs(ls)) and abs(c - lc) <= np.spacing(abs(lc))
-    s, c = sin_cos(np.inf)
-    assert math.isnan(s) and math.isnan(c)
-
-
-def test_joint_angles_beyond_the_reduction_range_match_the_reduced_ones():
-    """Angles whose sines the kernel leaves to libm (|v| >= 1e5 rad) give the clearance of the
-    same angles taken modulo 2 pi, in a batch and one state at a time."""
-    robot = armkit.robot("inspection_6dof")
-    checker = CollisionChecker(robot, shelf(), default_geometry(robot, 0.04))
-    Q = random_q(robot, 50, seed=9)
-    turns = np.zeros_like(Q)
-    turns[:, ::2] = 2 * np.pi * 20_000                      # 1.26e5 rad on three joints
-    far = Q + turns
-    np.testing.assert_allclose(checker.clearance(far), checker.clearance(Q), atol=1e-9)
-    np.testing.assert_allclose([checker.clearance(q) for q in far], checker.clearance(Q),
-                               atol=1e-9)
-
-
-def test_kernel_sine_reduction_constants_split_half_pi():
-    """The three parts of pi/2 the reduction subtracts: the first two of 33 significant bits
-    (their products with any k below 2**20 are exact), the three summing to pi/2 within 1e-36,
-    pi from Machin's formula in integers."""
-    from fractions import Fraction
-
-    from armkit.planning.collision import _PI_2_HIGH, _PI_2_LOW, _PI_2_MID
-
-    def arctan_of_inverse(n: int, scale: int) -> int:
-        total, term, k = 0, scale // n, 1
-        while term:
-            total += term // k if k % 4 == 1 else -(term // k)
-            term //= n * n
-            k += 2
-        return total
-
-    scale = 10 ** 60
-    half_pi = Fraction(16 * arctan_of_inverse(5, scale) - 4 * arctan_of_inverse(239, scale),
-                       2 * scale)
-    for part in (_PI_2_HIGH, _PI_2_MID):
-        mantissa = Fraction(part)
-        while mantissa.denominator != 1:
-            mantissa *= 2
-        assert int(mantissa).bit_length() - (int(mantissa) & -int(mantissa)).bit_length() < 33
-    assert abs(Fraction(_PI_2_HIGH) + Fraction(_PI_2_MID) + Fraction(_PI_2_LOW) - half_pi) < 1e-36

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from armkit.planning import Box, Capsule, Cylinder, Scene, Sphere
-from armkit.planning.collision import obstacle_distance, segment_distance
+from armkit.planning.distances import obstacle_distance, segment_distance
 from armkit.spatial import pose_from_xyz_rpy
 from tests.planning.reference import point_distance, segment_obstacle, segment_segment
 

@@ -33,18 +33,12 @@ def shelf_checker():
     return CollisionChecker(robot, shelf(), default_geometry(robot, 0.04), RESOLUTION)
 
 
-def dense_ok(checker, path):
-    """Independent check every 0.002 rad: at least half the resolution from every obstacle,
-    the resolution between capsules (what certification promises)."""
-    obstacle_gap, self_gap, _ = reference.dense_gaps(checker.robot, checker.geometry,
-                                                     checker.scene, path, step=0.002, points=60)
-    return obstacle_gap >= checker.resolution / 2 - 1e-12 and \
-        self_gap >= checker.resolution - 1e-12
 
 
 @pytest.mark.parametrize("planner", PLANNERS)
 def test_shelf_paths_pass_the_dense_check(shelf_checker, planner):
     result = plan(shelf_checker, SHELF_START, SHELF_GOAL, planner=planner, seed=1, waypoints=10,
+                  time_limit=np.inf,
                   max_iterations=300 if planner == "rrtstar" else None)
     assert result.success, result.reason
     assert result.reason == "ok" and result.path.shape == (10, 6)
@@ -54,7 +48,7 @@ def test_shelf_paths_pass_the_dense_check(shelf_checker, planner):
     assert result.length <= result.raw_length + 1e-9
     assert 0 < result.planning_time <= result.total_time
     assert shelf_checker.path_valid(result.path)
-    assert dense_ok(shelf_checker, result.path)
+    assert reference.dense_ok(shelf_checker, result.path)
     # Waypoints evenly spaced by arc length along the returned path.
     steps = np.linalg.norm(np.diff(result.path, axis=0), axis=1)
     assert np.ptp(steps) < 1e-9 or len(result.path) > 10 or \
@@ -74,16 +68,16 @@ def test_random_scenes(seed):
         goal = np.clip(start + rng.uniform(-1.5, 1.5, 6), robot.lower, robot.upper)
         if checker.valid(goal) and not checker.edge_valid(start, goal)[0]:
             break
-    result = plan(checker, start, goal, seed=seed, time_limit=30)
+    result = plan(checker, start, goal, seed=seed, time_limit=np.inf)
     assert result.success, result.reason
-    assert dense_ok(checker, result.path)
-    assert dense_ok(checker, result.raw_path)
+    assert reference.dense_ok(checker, result.path)
+    assert reference.dense_ok(checker, result.raw_path)
 
 
 def test_same_seed_same_path(shelf_checker):
     for planner in PLANNERS:
-        kw = dict(planner=planner, waypoints=10, max_iterations=200 if planner == "rrtstar"
-                  else None)
+        kw = dict(planner=planner, waypoints=10, time_limit=np.inf,
+                  max_iterations=200 if planner == "rrtstar" else None)
         a = plan(shelf_checker, SHELF_START, SHELF_GOAL, seed=7, **kw)
         b = plan(shelf_checker, SHELF_START, SHELF_GOAL, seed=7, **kw)
         assert a.success and b.success
@@ -115,9 +109,9 @@ def test_enclosed_goal_ends_within_budget(planner):
 
     validity = ValidityFunction(outside_ring, [0, 0], [1, 1], resolution=0.005)
     result = plan(validity, [0.05, 0.05], [0.5, 0.5], planner=planner, max_iterations=300,
-                  seed=0)
+                  seed=0, time_limit=np.inf)
     assert not result.success
-    assert result.reason.startswith("no path within the budget (300 iterations")
+    assert result.reason.startswith("no path within the iteration budget (300 iterations")
     assert result.iterations == 300
 
 
@@ -133,6 +127,7 @@ def test_user_validity_function_with_every_planner(planner):
         return np.linalg.norm(Q[:, None] - centres[None], axis=-1).min(axis=1) > radius
 
     result = plan(free, [0.05, 0.5], [0.95, 0.5], planner=planner, limits=([0, 0], [1, 1]),
+                  time_limit=np.inf,
                   resolution=0.002, seed=3, waypoints=12,
                   max_iterations=1500 if planner == "rrtstar" else None)
     assert result.success, result.reason
@@ -144,18 +139,19 @@ def test_user_validity_function_with_every_planner(planner):
 
 
 def test_direct_edge_first():
-    result = plan("ur5", np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
+    result = plan(armkit.robot("ur5"), np.zeros(6) + 0.1, np.full(6, 0.3), scene=Scene())
     assert result.success and result.iterations == 0 and len(result.raw_path) == 2
 
 
 def test_goal_pose_every_collision_free_ik_solution_is_a_goal(shelf_checker):
     robot = shelf_checker.robot
     T = armkit.fk(robot, SHELF_GOAL)
-    result = plan(shelf_checker, SHELF_START, goal_pose=T, seed=2, waypoints=10)
+    result = plan(shelf_checker, SHELF_START, goal_pose=T, seed=2, waypoints=10,
+                  time_limit=np.inf)
     assert result.success, result.reason
     assert len(result.goals) >= 1 and shelf_checker.valid(result.goals).all()
     np.testing.assert_allclose(armkit.fk(robot, result.path[-1]), T, atol=1e-9)
-    assert dense_ok(shelf_checker, result.path)
+    assert reference.dense_ok(shelf_checker, result.path)
 
 
 def test_several_goals():
@@ -215,6 +211,15 @@ def test_plan_bad_input(shelf_checker):
         plan(lambda Q: np.ones(len(Q), bool), [0, 0], [1, 1])
     with pytest.raises(InputError, match="robot: expected"):
         plan(42, [0, 0], [1, 1])
+    with pytest.raises(InputError, match="robot: expected a Robot.*found str"):
+        plan("ur5", np.zeros(6), np.ones(6))        # names are loaded by armkit.robot
+    for field, value in (("time_limit", -1.0), ("time_limit", float("nan")), ("step", 0.0),
+                         ("goal_bias", 2.0), ("max_iterations", 1.5), ("waypoints", 1),
+                         ("seed", 0.5), ("shortcut_tries", -1), ("resolution", "x")):
+        with pytest.raises(InputError, match=f"{field}: expected"):
+            plan(shelf_checker, SHELF_START, SHELF_GOAL, **{field: value})
+    with pytest.raises(TypeError):
+        plan(shelf_checker, SHELF_START, SHELF_GOAL, colour="red")
     with pytest.raises(InputError, match="goal_pose"):
         plan(lambda Q: np.ones(len(Q), bool), [0, 0], goal_pose=np.eye(4),
              limits=([0, 0], [1, 1]))

@@ -145,7 +145,7 @@ def view(robot: RobotArg,
     try:
         visuals = read_visuals(model)
     except ImportError:
-        _say("the URDF's visual meshes need trimesh (pip install \"armkit[meshes]\"): "
+        _say("the URDF's visual meshes need trimesh (pip install \"armkit[mesh]\"): "
              "drawing the collision capsules")
         visuals = None
     if visuals is not None:

@@ -12,16 +12,17 @@ from armkit.cli.command import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder
 from armkit.errors import InputError
 from armkit.model import SI
 
-PLANNERS = ("rrtconnect", "rrt", "rrtstar")
-
 
 @app.command(name="plan")
 def plan_command(
     file: Annotated[Path, typer.Argument(help="Planning file (.yaml): robot, obstacles, start, "
                                               "goal or goal_pose, planner settings.")],
     planner: Annotated[str | None, typer.Option(
-        help=f"One of {', '.join(PLANNERS)} (default: the file's, else rrtconnect).")] = None,
+        help="One of rrtconnect, rrt, rrtstar (default: the file's, else rrtconnect).")] = None,
     seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).")] = None,
+    time_limit: Annotated[float | None, typer.Option(
+        "--time-limit", help="Seconds for the whole search (default: the file's, else 10).")
+    ] = None,
     waypoints: Annotated[int | None, typer.Option(
         help="Resample the path to N waypoints evenly spaced in joint space.")] = None,
     out: Annotated[Path | None, typer.Option(
@@ -29,10 +30,12 @@ def plan_command(
     as_json: JsonFlag = False, si: SiFlag = False) -> None:
     """Plan a collision-free path; exit 1 with the reason when none is found."""
     from armkit.io.scene import read_planning_problem
-    from armkit.planning import CollisionChecker, arm_geometry, plan
+    from armkit.planning import PLANNERS, CollisionChecker, PlanSettings, arm_geometry, plan
 
     if planner is not None and planner not in PLANNERS:
         raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found {planner!r}")
+    if time_limit is not None and not time_limit >= 0:
+        raise InputError(f"--time-limit: expected seconds >= 0, found {time_limit:g}")
     if waypoints is not None and waypoints < 2:
         raise InputError(f"--waypoints: expected a whole number >= 2, found {waypoints}")
     if out is not None:
@@ -40,13 +43,15 @@ def plan_command(
     problem = read_planning_problem(file)
     robot, units = problem.robot, (SI if si else problem.units)
     settings = dict(problem.settings)
-    for key, value in (("planner", planner), ("seed", seed), ("waypoints", waypoints)):
+    for key, value in (("planner", planner), ("seed", seed), ("waypoints", waypoints),
+                       ("time_limit", time_limit)):
         if value is not None:
             settings[key] = value
     resolution = settings.pop("resolution", 0.005)
     checker = CollisionChecker(robot, problem.scene, arm_geometry(robot, problem.radius),
                                resolution=resolution)
-    result = plan(checker, problem.start, problem.goal, goal_pose=problem.goal_pose, **settings)
+    result = plan(checker, problem.start, problem.goal, PlanSettings(**settings),
+                  goal_pose=problem.goal_pose)
     figure = None
     if out is not None and result.success:
         from armkit.report.planning import save_path_figure
@@ -77,7 +82,8 @@ def _show(doc: dict, robot) -> None:
     stdout.print(f"{doc['planner']}: path found in {doc['planning_time_s'] * 1e3:.3g} ms "
                  f"({doc['iterations']} iterations, {doc['states_checked']} states checked); "
                  f"joint-space length {doc['length_before_shortcut']:.4g} -> {doc['length']:.4g}"
-                 f"; certified at {doc['resolution']:g} {doc['units']['length']}")
+                 f"; every edge certified free (pieces down to {doc['resolution']:g} "
+                 f"{doc['units']['length']})")
     table = Table("#", *[f"{n} ({u})" for n, u in zip(robot.joint_names, doc["joint_units"])],
                   box=None, title="waypoints", title_justify="left")
     for i, q in enumerate(doc["waypoints"]):

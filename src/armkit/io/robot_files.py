@@ -39,6 +39,7 @@ from armkit.model.dh import DHRow, DHTable, chain_from_dh
 from armkit.model.inertia import Inertia, InertialModel, home_link_frames
 from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
 from armkit.model.robot import Robot, Units
+from armkit.io.srdf import read_srdf
 from armkit.io.urdf import read_urdf
 from armkit.model.urdf import URDFTable, chain_from_urdf, inertia_from_urdf
 from armkit.spatial import invert, matrix_to_rpy, pose_from_xyz_rpy
@@ -156,7 +157,7 @@ class InertiaField(StrictModel):
 
 
 class CollisionShapeField(StrictModel):
-    link: int = Field(ge=0)
+    link: Annotated[int, Field(ge=0)] | str       # a link number, or a URDF robot's link name
     a: Vector3
     b: Vector3 | None = None
     radius: float = Field(gt=0)
@@ -167,7 +168,10 @@ class CollisionField(StrictModel):
 
     radius: float | None = Field(None, gt=0)
     shapes: list[CollisionShapeField] = []
-    skip: list[Annotated[list[int], Field(min_length=2, max_length=2)]] = []
+    # Link pairs never tested: by number, or by a URDF robot's link names.
+    skip: list[Annotated[list[int], Field(min_length=2, max_length=2)]
+               | Annotated[list[str], Field(min_length=2, max_length=2)]] = []
+    adjacent: bool = False      # test adjacent links too (MoveIt's rule with an SRDF)
 
     @model_validator(mode="after")
     def _one_kind(self):
@@ -199,6 +203,7 @@ class ScrewFile(_RobotField):
 class URDFFile(_RobotField):
     urdf: str
     tip: str | None = None
+    srdf: str | None = None     # its disable_collisions pairs are left out of the checks
 
 
 FILE_MODELS = {"dh": DHFile, "mdh": DHFile, "poe": ScrewFile, "urdf": URDFFile}
@@ -235,6 +240,12 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
         table = dataclasses.replace(found, T_base=T_base, T_tool=T_tool)
         chain = chain_from_urdf(table)
         inertia = inertia_from_urdf(table, chain)
+        if spec.srdf is not None:
+            srdf = Path(path).parent / spec.srdf
+            if not srdf.is_file():
+                raise ModelFileError(path, "srdf", "an SRDF file (its path relative to this "
+                                     "file)", f"{found_text(spec.srdf)}, which is not a file")
+            disabled = read_srdf(srdf, _srdf_links(table)).disabled_pairs
     elif isinstance(spec, ScrewFile):
         rows = tuple(_screw_row(j, i, units) for i, j in enumerate(spec.joints))
         table = ScrewTable(rows, _pose(spec.home, units), T_base, T_tool)
@@ -248,28 +259,69 @@ def parse_robot(document: Any, path: str = "<robot>") -> Robot:
         table = DHTable(rows, convention == "mdh", T_base, T_tool)
         chain = chain_from_dh(table)
         inertia = None
-    collision = _collision(spec.collision, units, chain.n, path)
+    names = _urdf_links(table) if isinstance(table, URDFTable) else {}
+    collision = _collision(spec.collision, units, chain.n, path, names)
+    if isinstance(spec, URDFFile) and spec.srdf is not None:
+        collision = dataclasses.replace(collision or CollisionSpec(), adjacent=True,
+                                        disabled=(collision.disabled if collision else ())
+                                        + disabled)
     inertia = _inertia(spec, inertia, chain, units, path)
     return Robot(spec.name, chain, units, spec.description, table, collision, inertia)
 
 
-def _collision(field: CollisionField | None, units: Units, n: int,
-               path: str) -> CollisionSpec | None:
-    """The collision section in SI; links are numbered 0 (base) to n (the last link)."""
+def _urdf_links(table: URDFTable) -> dict[str, int]:
+    """The URDF's link names on the arm (the chain's links and those merged into them), each
+    with its link number."""
+    names = {table.joints[0].parent: 0} if table.joints else {}
+    moving = 0
+    for joint in table.joints:
+        moving += joint.kind != "fixed"
+        names.setdefault(joint.child, moving)
+    for c in table.collisions:
+        names.setdefault(c.link, c.chain_link)
+    return names
+
+
+def _srdf_links(table: URDFTable) -> set[str]:
+    """The link names an SRDF's pairs may give: the arm's, and those with collision elements
+    that joints off the chain move (a gripper's fingers)."""
+    return set(_urdf_links(table)) | set(table.detached)
+
+
+def _collision(field: CollisionField | None, units: Units, n: int, path: str,
+               names: dict[str, int]) -> CollisionSpec | None:
+    """The collision section in SI; links are numbered 0 (base) to n (the last link), or
+    named by a URDF robot's link names (`names`: name -> number)."""
     if field is None:
         return None
+    shapes = []
+    length = units.length_to_si
     for i, s in enumerate(field.shapes):
-        if s.link > n:
+        if isinstance(s.link, str) and s.link not in names:
+            raise ModelFileError(path, f"collision.shapes[{i}].link", "a link number or a "
+                                 "link name of the URDF's arm", found_text(s.link))
+        link = names[s.link] if isinstance(s.link, str) else s.link
+        if link > n:
             raise ModelFileError(path, f"collision.shapes[{i}].link", f"a link 0 .. {n}",
                                  str(s.link))
+        shapes.append(CollisionShape(link, length(s.a), length(s.a if s.b is None else s.b),
+                                     float(length(s.radius)),
+                                     s.link if isinstance(s.link, str) else ""))
+    skip, disabled = [], []
     for i, pair in enumerate(field.skip):
-        if not all(0 <= k <= n for k in pair):
+        if isinstance(pair[0], str):
+            unknown = [x for x in pair if x not in names]
+            if unknown:
+                raise ModelFileError(path, f"collision.skip[{i}]", "two link names of the "
+                                     "URDF's arm" if names else "two link numbers (names only "
+                                     "for a URDF robot)", found_text(unknown[0]))
+            disabled.append((pair[0], pair[1]))
+        elif not all(0 <= k <= n for k in pair):
             raise ModelFileError(path, f"collision.skip[{i}]", f"two links 0 .. {n}", str(pair))
-    length = units.length_to_si
-    shapes = tuple(CollisionShape(s.link, length(s.a), length(s.a if s.b is None else s.b),
-                                  float(length(s.radius))) for s in field.shapes)
+        else:
+            skip.append((int(pair[0]), int(pair[1])))
     radius = None if field.radius is None else float(length(field.radius))
-    return CollisionSpec(radius, shapes, tuple((int(i), int(j)) for i, j in field.skip))
+    return CollisionSpec(radius, tuple(shapes), tuple(skip), tuple(disabled), field.adjacent)
 
 
 def _body(field: BodyField, units: Units, path: str, where: str) -> Inertia:
@@ -458,7 +510,8 @@ def _screw_row(joint: ScrewJointField, i: int, units: Units) -> ScrewRow:
                     _limits(joint, joint.type, units), point, joint.name or f"q{i + 1}")
 
 
-def load_robot(path: str | Path, tip: str | None = None) -> Robot:
+def load_robot(path: str | Path, tip: str | None = None, srdf: str | Path | None = None
+               ) -> Robot:
     """Load a robot from a YAML robot file or a URDF file (.urdf or .xacro: SI units).
 
     Parameters
@@ -467,6 +520,9 @@ def load_robot(path: str | Path, tip: str | None = None) -> Robot:
     tip : str, optional
         URDF only: the link the chain ends at, where the tree has several leaves (a robot
         file names its own ``tip``).
+    srdf : str or Path, optional
+        URDF only: an SRDF whose ``disable_collisions`` pairs the collision checks leave out
+        (a robot file names its own ``srdf``).
 
     Raises
     ------
@@ -480,11 +536,14 @@ def load_robot(path: str | Path, tip: str | None = None) -> Robot:
         table = read_urdf(path, tip)
         name = path.name.split(".")[0] or path.stem
         chain = chain_from_urdf(table)
-        return Robot(name, chain, Units("m", "rad"), "", table,
-                     inertia=inertia_from_urdf(table, chain))
-    if tip is not None:
-        raise InputError(f"tip: expected none for a robot file (it names its own tip), "
-                         f"found {found_text(tip)} for {path}")
+        collision = None if srdf is None else CollisionSpec(
+            disabled=read_srdf(srdf, _srdf_links(table)).disabled_pairs, adjacent=True)
+        return Robot(name, chain, Units("m", "rad"), "", table, collision,
+                     inertia_from_urdf(table, chain))
+    for key, value in (("tip", tip), ("srdf", srdf)):
+        if value is not None:
+            raise InputError(f"{key}: expected none for a robot file (it names its own), "
+                             f"found {found_text(str(value))} for {path}")
     return parse_robot(read_yaml(path, MAX_ROBOT_FILE_BYTES), str(path))
 
 
@@ -602,12 +661,14 @@ def _collision_doc(spec: CollisionSpec, u: Units) -> dict:
     if spec.radius is not None:
         doc["radius"] = _num(u.length_from_si(spec.radius))
     if spec.shapes:
-        doc["shapes"] = [{"link": s.link, "a": _nums(u.length_from_si(s.a)),
+        doc["shapes"] = [{"link": s.name or s.link, "a": _nums(u.length_from_si(s.a)),
                           **({} if np.array_equal(s.a, s.b) else
                              {"b": _nums(u.length_from_si(s.b))}),
                           "radius": _num(u.length_from_si(s.radius))} for s in spec.shapes]
-    if spec.skip:
-        doc["skip"] = [list(p) for p in spec.skip]
+    if spec.skip or spec.disabled:
+        doc["skip"] = [list(p) for p in spec.skip] + [list(p) for p in spec.disabled]
+    if spec.adjacent:
+        doc["adjacent"] = True
     return doc
 
 

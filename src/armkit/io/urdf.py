@@ -19,15 +19,18 @@ its own in q; its leader is an independent joint of the same kind, and has the v
 the other finger, in place of its first mimic joint). The leader's limits are narrowed to keep
 its mimic joints within their own. A mimic joint's velocity limit of 0, which gripper files
 often give, means it has none of its own (its leader's applies).
-Meshes (``package://`` or file paths in ``<visual>`` and ``<collision>``) play no part in the
-kinematics and are not read.
+Meshes play no part in the kinematics; those of ``<visual>`` are not read.
 
 The ``<collision>`` elements of the links rigidly attached to the chain (its links, and the links
 hanging on them through fixed joints, merged as the kinematics merges them) are read for the
 arm's collision geometry (`armkit.planning.arm_geometry`): boxes, cylinders and spheres with
-their ``<origin>``, each number checked as the joints' are; a ``<mesh>`` is kept as a mesh
-without reading its file. The ``<collision>`` elements of links moved by joints off the chain
-(a gripper's fingers, another arm) are not read: those links are not part of this arm.
+their ``<origin>``, each number checked as the joints' are, and meshes: the file a ``<mesh>``
+names (``package://P/...`` under a folder P above the URDF or in ``ROS_PACKAGE_PATH``,
+``file://``, or relative to the URDF) is read by trimesh (STL, OBJ, PLY; DAE with pycollada),
+the optional ``armkit[mesh]`` extra, and its vertices kept, scaled; without trimesh, or when
+the file is not found, the mesh is kept unread with a note (a mesh file that is there but
+unreadable is a ModelFileError). The ``<collision>`` elements of links moved by joints off the
+chain (a gripper's fingers, another arm) are not read: those links are not part of this arm.
 
 A ``.xacro`` file is expanded by the ``xacro`` package (``pip install "armkit[xacro]"``); xacro
 evaluates the file's expressions, so expand only files you trust.
@@ -35,6 +38,8 @@ evaluates the file's expressions, so expand only files you trust.
 
 from __future__ import annotations
 
+import io
+import os
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -77,6 +82,12 @@ MAX_INERTIA = 1e6
 
 MAX_TORQUE = 1e7
 """The largest effort limit (N m or N) and friction (N m, N m s/rad)."""
+
+MAX_MESH_BYTES = 64 * 2**20
+"""The largest collision mesh file read (bytes)."""
+
+MAX_VERTICES = 2_000_000
+"""The most vertices a collision mesh may have."""
 
 # A URDF number: ASCII decimal digits only (Python's float() also takes "١٢", "1_0", "nan").
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
@@ -437,9 +448,68 @@ def _read_collision(element: ET.Element, link: str, index: int, chain_link: int,
     elif kind == "sphere":
         size = _positive(shape, "radius", 1, path, at)
     else:
-        size = np.empty(0)      # a mesh: its file is not read (see the module's note)
+        size = _attribute(shape, "scale", "1 1 1", 3, path, at, MAX_AXIS)
+        if not np.all(size != 0):
+            raise ModelFileError(path, f"{at} scale", "3 non-zero factors",
+                                 found_text(shape.get("scale")))
+        found, vertices, faces, note = _read_mesh(shape.get("filename"), size, path, at)
+        return URDFCollision(link, index, chain_link, kind, size,
+                             T_anchor_link @ pose_from_xyz_rpy(xyz, rpy), found, vertices,
+                             faces, note)
     return URDFCollision(link, index, chain_link, kind, size,
                          T_anchor_link @ pose_from_xyz_rpy(xyz, rpy))
+
+
+def mesh_file(filename: str, urdf: str) -> Path | None:
+    """The file a URDF's mesh filename names, or None if it cannot be found: ``package://P/x``
+    under a folder named P above the URDF (or in ``ROS_PACKAGE_PATH``), ``file://x``, or a path
+    relative to the URDF."""
+    if filename.startswith("package://"):
+        package, _, rest = filename[len("package://"):].partition("/")
+        roots = [p for p in Path(urdf).resolve().parents if p.name == package]
+        roots += [Path(p) / package for p in os.environ.get("ROS_PACKAGE_PATH", "").split(
+            os.pathsep) if p]
+        for root in roots:
+            if (root / rest).is_file():
+                return root / rest
+        return None
+    if filename.startswith("file://"):
+        filename = filename[len("file://"):]
+    found = Path(urdf).parent / filename
+    return found if found.is_file() else None
+
+
+def _read_mesh(filename: str | None, scale: NDArray, path: str, where: str):
+    """A <mesh>'s (file, vertices scaled (v, 3), faces (f, 3), note), read by trimesh (the
+    optional ``armkit[mesh]`` extra); a file that cannot be found, or trimesh not installed,
+    leaves the vertices None and says so in the note."""
+    if not filename:
+        raise ModelFileError(path, f"{where} filename", "a mesh file name", "none")
+    found = mesh_file(filename, path)
+    if found is None:
+        return "", None, None, f"its file {found_text(filename)} was not found"
+    try:
+        import trimesh
+    except ImportError:
+        return str(found), None, None, ("trimesh is not installed (pip install "
+                                        "\"armkit[mesh]\")")
+    data = read_bytes(found, MAX_MESH_BYTES)
+    try:
+        mesh = trimesh.load(io.BytesIO(data), file_type=found.suffix.lstrip(".").lower(),
+                            force="mesh", process=False)
+        vertices = np.asarray(mesh.vertices, dtype=float)
+        faces = np.asarray(mesh.faces, dtype=np.int64).reshape(-1, 3)
+    except ImportError as err:                  # a format needing another package (DAE)
+        return str(found), None, None, f"trimesh cannot read it here ({err})"
+    except Exception as err:  # noqa: BLE001 - trimesh raises its own, numpy's and parsers'
+        raise ModelFileError(path, f"{where} filename", f"a mesh file trimesh reads "
+                             f"({found})", found_text(str(err) or type(err).__name__)) from None
+    if len(vertices) == 0 or not np.isfinite(vertices).all() or len(vertices) > MAX_VERTICES \
+            or (faces.size and (faces.min() < 0 or faces.max() >= len(vertices))):
+        raise ModelFileError(path, f"{where} filename", f"a mesh of 1 to {MAX_VERTICES} finite "
+                             f"vertices and faces naming them ({found})",
+                             f"{len(vertices)} vertices")
+    return str(found), vertices * scale, faces, ""
 
 
 def _read_collisions(root: ET.Element, root_link: str, chain: list[URDFJoint],

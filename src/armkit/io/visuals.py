@@ -1,6 +1,6 @@
 """A URDF's ``<visual>`` elements placed in the arm's link frames, for the 3-D views
 (`armkit.report.view`, which draws them): meshes read by trimesh (an optional extra: ``pip
-install "armkit[meshes]"``; Collada ``.dae`` files through pycollada), boxes, cylinders and
+install "armkit[mesh]"``; Collada ``.dae`` files through pycollada), boxes, cylinders and
 spheres by their sizes.
 
 The visuals of the links rigidly attached to the chain are read (the chain's links, and links

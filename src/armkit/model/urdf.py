@@ -60,10 +60,18 @@ class URDFCollision:
     kind : {"box", "cylinder", "sphere", "mesh"}
     size : ndarray
         Box: (3,) edge lengths along its x, y, z; cylinder: (radius, length), its axis its z;
-        sphere: (radius,); mesh: (0,) (its file is not read). m.
+        sphere: (radius,); mesh: (3,) its scale along x, y, z. m.
     T : ndarray, (4, 4)
         The element's frame (its <origin>, after the fixed joints between) in the URDF frame
         of the chain link.
+    mesh : str
+        A mesh's file, as found (empty if not found).
+    vertices : ndarray, (v, 3), optional
+        A mesh's vertices in the element's frame, scaled (m); None if its file was not read.
+    faces : ndarray of int, (f, 3), optional
+        A mesh's triangles (vertex indices).
+    note : str
+        Why a mesh was not read, if it was not.
     """
 
     link: str
@@ -72,9 +80,17 @@ class URDFCollision:
     kind: str
     size: NDArray
     T: NDArray
+    mesh: str = ""
+    vertices: NDArray | None = None
+    faces: NDArray | None = None
+    note: str = ""
 
     def __post_init__(self):
-        freeze(self, "size", "T")
+        freeze(self, "size", "T", "vertices")
+        if self.faces is not None:
+            faces = np.array(self.faces, dtype=np.int64)
+            faces.setflags(write=False)
+            object.__setattr__(self, "faces", faces)
 
 
 @dataclass(frozen=True)

@@ -3,8 +3,9 @@
 A planner's path is certified segment by segment; a motion along it (a spline, a retimed path)
 leaves the straight segments, so it is certified again as a motion: sampled so densely that no
 point of the arm moves more than half the checker's resolution between two samples, and every
-sample kept clear by the resolution (`CollisionChecker.valid`). Between two samples the arm
-therefore stays within half a resolution of where a sample was, which the clearance covers.
+sample's clearance (`CollisionChecker.clearance`) above a quarter of the resolution. Between two
+samples every point of the arm stays within a quarter of a resolution of where it was at one of
+them, which the clearance covers (for two parts of the arm, half their gap: both move).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from armkit.trajectory.piecewise import Trajectory
 MAX_SAMPLES = 2_000_000
 """The most samples a certification takes; a motion that needs more is not certified."""
 SPEED_MARGIN = 1.05        # on the peak joint speeds: the samples come a little closer
+CLEARANCE = 0.25           # of the resolution: each sample's clearance (see the module notes)
 
 
 @dataclass(frozen=True)
@@ -29,7 +31,7 @@ class Certificate:
     Attributes
     ----------
     success : bool
-        Every sample valid.
+        Every sample clear by a quarter of the resolution.
     reason : str
         "ok"; "in collision at t = ... s"; or "needs more than ... samples".
     samples : int
@@ -51,7 +53,7 @@ def certify(checker, motion: Trajectory) -> Certificate:
     ----------
     checker : armkit.planning.CollisionChecker
         Its `weights` (m per unit of each joint: how far any point of the arm moves) and
-        `resolution` (m) set the sampling; `valid` checks the samples.
+        `resolution` (m) set the sampling; `clearance` checks the samples.
     motion : Trajectory
 
     Returns
@@ -68,7 +70,7 @@ def certify(checker, motion: Trajectory) -> Certificate:
         if count > MAX_SAMPLES:
             return Certificate(False, f"needs more than {MAX_SAMPLES:,} samples", 0)
     t = np.linspace(motion.start, motion.end, count)
-    valid = np.asarray(checker.valid(motion.evaluate(t)), bool)
+    valid = np.asarray(checker.clearance(motion.evaluate(t))) > CLEARANCE * checker.resolution
     if valid.all():
         return Certificate(True, "ok", count)
     first = float(t[np.argmin(valid)])

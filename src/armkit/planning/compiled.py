@@ -7,31 +7,40 @@ from the goals in RRT-Connect; with each node its free distance, so an edge from
 check it again), the nearest neighbour is a brute-force scan of the contiguous node array (a
 few hundred nodes at most on the shelf: a spatial index does not pay), and the random numbers
 come from a seeded splitmix64 generator whose state is an array: the same seed gives the same
-path. The kernel runs a number of iterations and returns;
-Python calls it again (growing the arrays when a tree is full) until a path is found, the
-iteration budget is spent or the time limit has passed, so the state between calls is all in
-the arrays and a path does not depend on how the iterations were split.
+path. The kernel runs until it finds a path, spends its iterations, passes its deadline (read
+inside the loop through `armkit.planning.clock`) or pauses: as Python, a loop pauses every
+`SLICE` s so that a kernel compiled meanwhile takes over. Python calls it again (growing the
+arrays when a tree is full) until it is done; the state between calls is all in the arrays, so a
+path does not depend on how the iterations were split.
 """
 
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 from numpy.typing import NDArray
 
 from armkit.jit import kernel
-from armkit.planning.collision import QUEUE_SIZE, CollisionChecker, edge_free, work_array
+from armkit.planning.clock import clock_gettime, expired, left, paused, paused_after
+from armkit.planning.collision import (
+    FREE,
+    QUEUE_SIZE,
+    TIMED_OUT,
+    CollisionChecker,
+    edge_free,
+    new_work,
+)
 
-# numba's cache keys a kernel on its own file only: these kernels compile collision.py's code
-# into themselves, so a change to the checker's kernels or its model's layout must come with a
-# change to this file (or a cleared cache), else the cached planners read the new model with the
-# old code. (Changed with the checker's work arrays of 2026-11-24.)
+# numba's cache keys a kernel on its own file only: these kernels compile collision.py's,
+# distances.py's, clock.py's and the kinematic core's code into themselves, so a change to those
+# kernels or to the model's layout must come with a change to this file (or a cleared cache),
+# else the cached planners read the new model with the old code. (Changed with the clustered
+# sphere model and the deadline of 2026-11-27.)
 _jit = kernel(cache=True, nogil=True)
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
-RUNNING, FOUND, FULL = 0, 1, 2
+RUNNING, FOUND, FULL, PAUSED = 0, 1, 2, 3
 # Counters (int64): iterations, states checked, the tree RRT-Connect extends next, the goal
 # nodes of RRT* so far, and the path found: tree-0 node, tree-1 node or goal index.
 ITERATIONS, CHECKED, SIDE, GOAL_NODES, END_A, END_B = range(6)
@@ -108,8 +117,8 @@ def _nearest(nodes, size, q):
 
 
 @_jit
-def _extend(nodes, parent, cost, clear, size, t, target, step, q_new, F, I, W, floor, queue,
-            counters):
+def _extend(nodes, parent, cost, clear, size, t, target, step, q_new, M, W, padding, resolution,
+            queue, counters, clock, deadline, every):
     """One step of tree t from its node nearest to target toward it: (status, new node)."""
     near = _nearest(nodes[t], size[t], target)
     q_near = nodes[t, near]
@@ -120,9 +129,10 @@ def _extend(nodes, parent, cost, clear, size, t, target, step, q_new, F, I, W, f
     else:
         for j in range(q_new.shape[0]):
             q_new[j] = q_near[j] + (target[j] - q_near[j]) * (step / dist)
-    free, checked, f_new = edge_free(q_near, q_new, F, I, W, floor, queue, clear[t, near])
+    status, checked, f_new = edge_free(q_near, q_new, M, W, padding, resolution, queue,
+                                       clear[t, near], clock, deadline, every)
     counters[CHECKED] += checked
-    if not free:
+    if status != FREE:
         return TRAPPED, -1
     i = size[t]
     _copy(nodes[t, i], q_new)
@@ -139,14 +149,14 @@ def _extend(nodes, parent, cost, clear, size, t, target, step, q_new, F, I, W, f
 # rows: grow the arrays, call again).
 
 @_jit
-def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
-             cost, clear, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue,
-             F, I):
+def grow_rrt(stop, margin, step, goal_bias, gamma, padding, resolution, goals, lower, upper,
+             nodes, parent, cost, clear, size, child, sibling, goal_of, goal_nodes, counters,
+             best, rng, queue, M, clock, deadline, every):
     """RRT with a fixed step: toward a sample (a goal with probability goal_bias); done when a
     new node joins a goal within a step by a certified edge (END_A the node, END_B the
     goal)."""
-    W = work_array(I)
     n = goals.shape[1]
+    W = new_work(M, n)
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
     start_tree = counters[SIDE] * 0                   # 0, not a literal: one _extend compiled
@@ -155,10 +165,12 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, n
     while counters[ITERATIONS] < stop:
         if size[0] + margin > capacity or size[1] + margin > capacity:
             return FULL
+        if paused(clock, deadline):
+            return PAUSED
         counters[ITERATIONS] += 1
         _sample(q_rand, lower, upper, goals, goal_bias, rng)
         status, new = _extend(nodes, parent, cost, clear, size, start_tree, q_rand, step, q_new,
-                              F, I, W, floor, queue, counters)
+                              M, W, padding, resolution, queue, counters, clock, deadline, every)
         if status == TRAPPED:
             continue
         q = nodes[0, new]
@@ -172,7 +184,9 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, n
                 break
             free = dg == 0.0
             if not free:
-                free, checked, _ = edge_free(q, goals[g], F, I, W, floor, queue, -1.0)
+                status, checked, _ = edge_free(q, goals[g], M, W, padding, resolution, queue,
+                                               -1.0, clock, deadline, every)
+                free = status == FREE
                 counters[CHECKED] += checked
             if free:
                 counters[END_A], counters[END_B] = new, g
@@ -181,32 +195,35 @@ def grow_rrt(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, n
 
 
 @_jit
-def grow_connect(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
-                 cost, clear, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue,
-                 F, I):
+def grow_connect(stop, margin, step, goal_bias, gamma, padding, resolution, goals, lower, upper,
+                 nodes, parent, cost, clear, size, child, sibling, goal_of, goal_nodes, counters,
+                 best, rng, queue, M, clock, deadline, every):
     """RRT-Connect: tree SIDE extends toward a sample, the other connects greedily toward the
     new node; the trees swap (tree 0 from the start, tree 1 from the goals; END_A and END_B
     the nodes where they met)."""
-    W = work_array(I)
     n = goals.shape[1]
+    W = new_work(M, n)
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
     while counters[ITERATIONS] < stop:
         if size[0] + margin > capacity or size[1] + margin > capacity:
             return FULL
+        if paused(clock, deadline):
+            return PAUSED
         counters[ITERATIONS] += 1
         a = counters[SIDE]
         counters[SIDE] = 1 - a
         _sample(q_rand, lower, upper, goals, 0.0, rng)
-        status, new = _extend(nodes, parent, cost, clear, size, a, q_rand, step, q_new, F, I,
-                              W, floor, queue, counters)
+        status, new = _extend(nodes, parent, cost, clear, size, a, q_rand, step, q_new, M, W,
+                              padding, resolution, queue, counters, clock, deadline, every)
         if status == TRAPPED:
             continue
         target = nodes[a, new]
         status_b, last = ADVANCED, -1
         while status_b == ADVANCED:
             status_b, j = _extend(nodes, parent, cost, clear, size, 1 - a, target, step, q_new,
-                                  F, I, W, floor, queue, counters)
+                                  M, W, padding, resolution, queue, counters, clock, deadline,
+                                  every)
             if j >= 0:
                 last = j
         if status_b == REACHED:
@@ -217,15 +234,15 @@ def grow_connect(stop, margin, step, goal_bias, gamma, floor, goals, lower, uppe
 
 
 @_jit
-def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, nodes, parent,
-              cost, clear, size, child, sibling, goal_of, goal_nodes, counters, best, rng, queue,
-              F, I):
+def grow_star(stop, margin, step, goal_bias, gamma, padding, resolution, goals, lower, upper,
+              nodes, parent, cost, clear, size, child, sibling, goal_of, goal_nodes, counters,
+              best, rng, queue, M, clock, deadline, every):
     """RRT*: each new node takes the cheapest certified parent among its neighbours within the
     shrinking radius and rewires them through itself (costs of their subtrees lowered through
     the child / sibling lists); it runs to stop, keeping the cheapest node joined to a goal
     (best[0] its cost, END_A the node, END_B the goal)."""
-    W = work_array(I)
     n = goals.shape[1]
+    W = new_work(M, n)
     capacity = nodes.shape[1]
     q_rand, q_new = np.empty(n), np.empty(n)
     dist = np.empty(capacity)
@@ -236,6 +253,8 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
     while counters[ITERATIONS] < stop:
         if size[0] + margin > capacity or size[1] + margin > capacity:
             return FULL
+        if paused(clock, deadline):
+            return PAUSED
         counters[ITERATIONS] += 1
         _sample(q_rand, lower, upper, goals, goal_bias, rng)
         # RRT*
@@ -248,7 +267,9 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
         else:
             for j in range(n):
                 q_new[j] = q_near[j] + (q_rand[j] - q_near[j]) * (step / d_near)
-        free, checked, f_new = edge_free(q_near, q_new, F, I, W, floor, queue, clear[0, near])
+        status, checked, f_new = edge_free(q_near, q_new, M, W, padding, resolution, queue,
+                                           clear[0, near], clock, deadline, every)
+        free = status == FREE
         counters[CHECKED] += checked
         if not free:
             continue
@@ -268,7 +289,9 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
             if keys[s] >= c_new:
                 break
             j = near_ids[s]
-            free, checked, _ = edge_free(nodes[0, j], q_new, F, I, W, floor, queue, -1.0)
+            status, checked, _ = edge_free(nodes[0, j], q_new, M, W, padding, resolution,
+                                           queue, -1.0, clock, deadline, every)
+            free = status == FREE
             counters[CHECKED] += checked
             if free:
                 chosen, c_new = j, keys[s]
@@ -285,7 +308,9 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
             c = c_new + dist[j]
             if j == chosen or c >= cost[0, j]:
                 continue
-            free, checked, _ = edge_free(q_new, nodes[0, j], F, I, W, floor, queue, -1.0)
+            status, checked, _ = edge_free(q_new, nodes[0, j], M, W, padding, resolution,
+                                           queue, -1.0, clock, deadline, every)
+            free = status == FREE
             counters[CHECKED] += checked
             if not free:
                 continue
@@ -318,7 +343,9 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
                 continue
             free = dg == 0.0
             if not free:
-                free, checked, _ = edge_free(q_new, goals[g], F, I, W, floor, queue, -1.0)
+                status, checked, _ = edge_free(q_new, goals[g], M, W, padding, resolution,
+                                               queue, -1.0, clock, deadline, every)
+                free = status == FREE
                 counters[CHECKED] += checked
             if free:
                 goal_of[new] = g
@@ -335,16 +362,21 @@ def grow_star(stop, margin, step, goal_bias, gamma, floor, goals, lower, upper, 
 
 
 @_jit
-def shortcut_kernel(P, tries, min_gain, rng, floor, queue, F, I, counters):
+def shortcut_kernel(P, tries, min_gain, rng, padding, resolution, queue, M, counters, clock,
+                    deadline, every, reduce):
     """Random shortcuts (two points drawn along the path by arc length, joined straight where
     the edge is certified), then greedy vertex reduction (each kept vertex joined to the
     farthest later vertex it reaches by a certified edge). P (k, n), no repeated rows. A draw
     whose shortcut would save less than min_gain times the path's length is not checked (it
     counts as a try): certifying a long edge near obstacles costs many states, and late draws
-    mostly straighten what is nearly straight already. Returns the new path; states checked
-    added to counters[0]."""
-    W = work_array(I)
+    mostly straighten what is nearly straight already. At the timer's pause it stops trying
+    (counters[1] counts the tries made: a call with the path so far, the tries left and the
+    same rng goes on as if never stopped); past the deadline the path so far, certified, is
+    the result. The vertex reduction runs only if `reduce`. Returns the new path; states
+    checked added to counters[0]. A piece of a certified edge is certified: the spliced ends
+    need no check."""
     n = P.shape[1]
+    W = new_work(M, n)
     cap = P.shape[0] + tries + 2
     p = np.empty((cap, n))
     k = P.shape[0]
@@ -354,8 +386,9 @@ def shortcut_kernel(P, tries, min_gain, rng, floor, queue, F, I, counters):
     tmp = np.empty((cap, n))
     a, b = np.empty(n), np.empty(n)
     for _ in range(tries):
-        if k < 3:
+        if k < 3 or paused(clock, deadline):
             break
+        counters[1] += 1
         cum[0] = 0.0
         for i in range(1, k):
             cum[i] = cum[i - 1] + _distance(p[i], p[i - 1])
@@ -366,9 +399,12 @@ def shortcut_kernel(P, tries, min_gain, rng, floor, queue, F, I, counters):
         i2 = _point_at(p, cum, k, s2, b)
         if i1 == i2 or (s2 - s1) - _distance(a, b) < min_gain * cum[k - 1]:
             continue
-        free, checked, _ = edge_free(a, b, F, I, W, floor, queue, -1.0)
+        status, checked, _ = edge_free(a, b, M, W, padding, resolution, queue, -1.0, clock,
+                                       deadline, every)
         counters[0] += checked
-        if not free:
+        if status == TIMED_OUT:
+            break
+        if status != FREE:
             continue
         # p[:i1 + 1], a, b, p[i2 + 1:], repeats dropped
         m = 0
@@ -381,7 +417,8 @@ def shortcut_kernel(P, tries, min_gain, rng, floor, queue, F, I, counters):
         for i in range(m):
             _copy(p[i], tmp[i])
         k = m
-    m = _reduce(p, k, tmp, F, I, W, floor, queue, counters)
+    m = _reduce(p, k, tmp, M, W, padding, resolution, queue, counters, clock, deadline,
+                every) if reduce else k
     result = np.empty((m, n))
     for i in range(m):
         _copy(result[i], p[i])
@@ -389,16 +426,23 @@ def shortcut_kernel(P, tries, min_gain, rng, floor, queue, F, I, counters):
 
 
 @_jit
-def _reduce(p, k, tmp, F, I, W, floor, queue, counters):
+def _reduce(p, k, tmp, M, W, padding, resolution, queue, counters, clock, deadline, every):
     """Greedy vertex reduction of p[:k] in place (each kept vertex joined to the farthest
-    later vertex it reaches by a certified edge); the new count."""
+    later vertex it reaches by a certified edge; past the deadline, to the next one); the new
+    count."""
     _copy(tmp[0], p[0])
     m, i = 1, 0
+    late = False
     while i < k - 1:
         for j in range(k - 1, i, -1):
             free = j == i + 1
-            if not free:
-                free, checked, _ = edge_free(p[i], p[j], F, I, W, floor, queue, -1.0)
+            if not (free or late):
+                late = expired(clock, deadline)
+            if not (free or late):
+                status, checked, _ = edge_free(p[i], p[j], M, W, padding, resolution, queue,
+                                               -1.0, clock, deadline, every)
+                free = status == FREE
+                late = status == TIMED_OUT
                 counters[0] += checked
             if free:
                 _copy(tmp[m], p[j])
@@ -462,15 +506,18 @@ def _branch(nodes: NDArray, parent: NDArray, i: int) -> NDArray:
 
 
 _NO_LIST = np.full(1, -1, np.int64)       # RRT and RRT-Connect keep no child lists
+SLICE = 0.005       # s: how long a loop runs as Python before its driver looks again whether
+#                     its compiled version is ready
 
 
-def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, planner: str, *,
-                  step: float, seed: int | None, max_iterations: int, time_limit: float,
+def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, planner, *,
+                  step: float, seed: int | None, max_iterations: int, deadline: NDArray,
                   goal_bias: float = 0.05, capacity: int = 1024):
-    """Run a planner's compiled loop: ``(path or None, iterations, states_checked, reason)``,
-    as the Python planners of `armkit.planning.rrt`. capacity: the trees' first size (rows;
-    doubled whenever full)."""
-    t0 = time.perf_counter()
+    """Run a planner's compiled loop (`planner`: an entry of `armkit.planning.planners.PLANNERS`)
+    until it finds a path, spends `max_iterations` or passes the deadline (a
+    `armkit.planning.clock.timer`, read inside the loop): ``(path or None, iterations,
+    states_checked, reason)``, as the Python planners of `armkit.planning.rrt`. capacity: the
+    trees' first size (rows; doubled whenever full)."""
     n = checker.n
     lower = np.array(checker.lower, dtype=float)      # writable: the kernels' one signature
     upper = np.array(checker.upper, dtype=float)
@@ -481,17 +528,17 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
     nodes = np.empty((2, capacity, n))
     parent = np.empty((2, capacity), np.int64)      # rows past size are written before read
     cost = np.empty((2, capacity))
-    clear = np.empty((2, capacity))                 # each node's free distance (capped)
+    clear = np.empty((2, capacity))                 # each node's clearance (capped)
     size = np.zeros(2, np.int64)
     nodes[0, 0] = start
     parent[0, 0], cost[0, 0], clear[0, 0] = -1, 0.0, -1.0       # -1: not known
     size[0] = 1
-    if planner == "rrtconnect":
+    if planner.trees == 2:
         g = len(goals)
         nodes[1, :g] = goals
         parent[1, :g], cost[1, :g], clear[1, :g] = -1, 0.0, -1.0
         size[1] = g
-    if planner == "rrtstar":
+    if planner.rewires:
         child = np.full(capacity, -1, np.int64)
         sibling = np.full(capacity, -1, np.int64)
         goal_of = np.full(capacity, -1, np.int64)
@@ -499,62 +546,70 @@ def plan_compiled(checker: CollisionChecker, start: NDArray, goals: NDArray, pla
         volume = float(np.prod(extent))
         unit_ball = math.pi ** (n / 2) / math.gamma(n / 2 + 1)
         gamma = 2.0 * ((1 + 1 / n) * volume / unit_ball) ** (1 / n)
-        grow = grow_star
     else:
         child = sibling = goal_of = goal_nodes = _NO_LIST
         gamma = 0.0
-        grow = grow_connect if planner == "rrtconnect" else grow_rrt
     counters = np.zeros(6, np.int64)
     counters[END_A] = counters[END_B] = -1
     best = np.array([np.inf])
     rng = rng_state(seed)
     queue = np.empty((4, QUEUE_SIZE))
-    F, I = checker.model
-    chunk = 64
-    status = RUNNING
+    grow = planner.kernel
     while True:
-        stop = min(int(counters[ITERATIONS]) + chunk, max_iterations)
-        status = grow.light(stop, margin, step, goal_bias, gamma, checker.resolution, goals,
-                      lower, upper, nodes, parent, cost, clear, size, child, sibling, goal_of,
-                      goal_nodes, counters, best, rng, queue, F, I)
-        if status == FOUND:
-            break
+        # The Python tier pauses every SLICE s, so that a loop compiled meanwhile takes over;
+        # its edge checks read the clock at every state, the compiled loop's every 16.
+        compiled = grow.is_compiled
+        status = grow.light(max_iterations, margin, step, goal_bias, gamma, checker.padding,
+                            checker.resolution, goals, lower, upper, nodes, parent, cost, clear,
+                            size, child, sibling, goal_of, goal_nodes, counters, best, rng,
+                            queue, checker.arrays, clock_gettime,
+                            deadline if compiled else paused_after(deadline, SLICE),
+                            16 if compiled else 1)
         if status == FULL:
             nodes = np.concatenate([nodes, np.empty_like(nodes)], axis=1)
             parent = np.concatenate([parent, np.full_like(parent, -1)], axis=1)
             cost = np.concatenate([cost, np.zeros_like(cost)], axis=1)
             clear = np.concatenate([clear, np.full_like(clear, -1.0)], axis=1)
-            if planner == "rrtstar":
+            if planner.rewires:
                 child, sibling, goal_of = (np.concatenate([x, np.full_like(x, -1)])
                                            for x in (child, sibling, goal_of))
                 goal_nodes = np.concatenate([goal_nodes, np.empty_like(goal_nodes)])
-            continue
-        if counters[ITERATIONS] >= max_iterations or time.perf_counter() - t0 > time_limit:
+        elif status != PAUSED or left(deadline) <= 0:
             break
-        chunk = min(2 * chunk, 4096 if grow.is_compiled else 256)
     iterations, checked = int(counters[ITERATIONS]), int(counters[CHECKED])
     end_a, end_b = int(counters[END_A]), int(counters[END_B])
-    if status == FOUND and planner == "rrtconnect":
+    if status == FOUND and planner.trees == 2:
         pa = _branch(nodes[0], parent[0], end_a)
         pb = _branch(nodes[1], parent[1], end_b)
         return np.concatenate([pa, pb[-2::-1]]), iterations, checked, "ok"
-    if end_a >= 0 and planner in ("rrt", "rrtstar"):
+    if end_a >= 0 and planner.trees == 1:
         path = _branch(nodes[0], parent[0], end_a)
         if not np.array_equal(path[-1], goals[end_b]):
             path = np.vstack([path, goals[end_b]])
         return path, iterations, checked, "ok"
-    return None, iterations, checked, (f"no path within the budget ({iterations} iterations, "
-                                       f"{time.perf_counter() - t0:.3g} s)")
+    spent = "time limit" if status == PAUSED else "iteration budget"
+    return None, iterations, checked, f"no path within the {spent} ({iterations} iterations)"
 
 
 def shortcut_compiled(checker: CollisionChecker, path: NDArray, *, seed: int | None,
-                      tries: int, min_gain: float = 0.01) -> tuple[NDArray, int]:
-    """`shortcut_kernel` on a path (k, n) without repeated rows: (path, states checked).
-    min_gain: the least saving worth checking a shortcut for, a fraction of the path's
-    length."""
-    counters = np.zeros(1, np.int64)
-    F, I = checker.model
-    out = shortcut_kernel.light(np.ascontiguousarray(path, dtype=float), int(tries),
-                                float(min_gain), rng_state(seed), checker.resolution,
-                                np.empty((4, QUEUE_SIZE)), F, I, counters)
-    return out, int(counters[0])
+                      tries: int, min_gain: float = 0.01, deadline: NDArray
+                      ) -> tuple[NDArray, int]:
+    """`shortcut_kernel` on a path (k, n) without repeated rows, until the deadline (a
+    `armkit.planning.clock.timer`): (path, states checked). min_gain: the least saving worth
+    checking a shortcut for, a fraction of the path's length."""
+    counters = np.zeros(2, np.int64)
+    rng = rng_state(seed)
+    queue = np.empty((4, QUEUE_SIZE))
+    path = np.ascontiguousarray(path, dtype=float)
+    while True:
+        compiled = shortcut_kernel.is_compiled
+        # Compiled, one call does it all; as Python, the tries pause every SLICE s (so that a
+        # kernel compiled meanwhile takes over), and the reduction is a call of its own.
+        reduce = compiled or counters[1] >= tries or len(path) < 3
+        path = shortcut_kernel.light(path, int(tries - counters[1]), float(min_gain), rng,
+                                     checker.padding, checker.resolution, queue, checker.arrays,
+                                     counters, clock_gettime,
+                                     deadline if compiled else paused_after(deadline, SLICE),
+                                     16 if compiled else 1, reduce)
+        if reduce or left(deadline) <= 0:
+            return path, int(counters[0])

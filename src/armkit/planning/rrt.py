@@ -129,22 +129,27 @@ class _Tree:
 
 
 class _Budget:
-    def __init__(self, max_iterations: int, time_limit: float):
-        self.max_iterations, self.time_limit = max_iterations, time_limit
+    """Iterations left and the deadline (a `armkit.planning.clock.timer`), read at every
+    iteration."""
+
+    def __init__(self, max_iterations: int, deadline: NDArray):
+        self.max_iterations, self.deadline = max_iterations, int(deadline[2])
         self.start = time.perf_counter()
         self.iterations = 0
+        self.late = False
 
     def more(self) -> bool:
         if self.iterations >= self.max_iterations:
             return False
-        if (self.iterations & 15) == 0 and time.perf_counter() - self.start > self.time_limit:
+        if time.monotonic_ns() >= self.deadline:
+            self.late = True
             return False
         self.iterations += 1
         return True
 
     def reason(self) -> str:
-        return (f"no path within the budget ({self.iterations} iterations, "
-                f"{time.perf_counter() - self.start:.3g} s)")
+        spent = "time limit" if self.late else "iteration budget"
+        return f"no path within the {spent} ({self.iterations} iterations)"
 
 
 class _Sampler:
@@ -199,11 +204,11 @@ def _extend(tree: _Tree, q_target: NDArray, step: float, check: _Counter) -> tup
 
 
 def rrt_connect(validity, start: NDArray, goals: NDArray, *, step: float, rng,
-                max_iterations: int, time_limit: float, **_):
+                max_iterations: int, deadline: NDArray, **_):
     """RRT-Connect (Kuffner and LaValle 2000): a tree from the start and one from the goals,
     each extension answered by the other tree connecting greedily toward the new node."""
     check = _Counter(validity)
-    budget = _Budget(max_iterations, time_limit)
+    budget = _Budget(max_iterations, deadline)
     sample = _Sampler(rng, validity.lower, validity.upper)
     a, b = _Tree(start.shape[0], start[None]), _Tree(start.shape[0], goals)
     a_is_start = True
@@ -231,11 +236,11 @@ def _goal_sample(sample, goals, rng, goal_bias):
 
 
 def rrt(validity, start: NDArray, goals: NDArray, *, step: float, rng, max_iterations: int,
-        time_limit: float, goal_bias: float = 0.05, **_):
+        deadline: NDArray, goal_bias: float = 0.05, **_):
     """RRT with a fixed step (LaValle 1998; paper 1): grow from the start toward samples (a goal
     with probability goal_bias); done when a new node connects straight to a goal."""
     check = _Counter(validity)
-    budget = _Budget(max_iterations, time_limit)
+    budget = _Budget(max_iterations, deadline)
     sample = _Sampler(rng, validity.lower, validity.upper)
     tree = _Tree(start.shape[0], start[None])
     while budget.more():
@@ -256,12 +261,12 @@ def rrt(validity, start: NDArray, goals: NDArray, *, step: float, rng, max_itera
 
 
 def rrt_star(validity, start: NDArray, goals: NDArray, *, step: float, rng, max_iterations: int,
-             time_limit: float, goal_bias: float = 0.05, **_):
+             deadline: NDArray, goal_bias: float = 0.05, **_):
     """RRT* (Karaman and Frazzoli 2011): each new node takes the cheapest parent among its
     neighbours and rewires them through itself; runs the whole budget and returns the
     shortest path found (joint-space length)."""
     check = _Counter(validity)
-    budget = _Budget(max_iterations, time_limit)
+    budget = _Budget(max_iterations, deadline)
     sample = _Sampler(rng, validity.lower, validity.upper)
     n = start.shape[0]
     tree = _Tree(n, start[None])
@@ -320,5 +325,3 @@ def rrt_star(validity, start: NDArray, goals: NDArray, *, step: float, rng, max_
         path = np.vstack([path, goals[best_goal]])
     return path, budget.iterations, check.checked, "ok"
 
-
-PLANNERS = {"rrt": rrt, "rrtconnect": rrt_connect, "rrtstar": rrt_star}

@@ -7,10 +7,14 @@ certified path stays certified.
 
 from __future__ import annotations
 
+import math
+import time
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
+from armkit.planning.clock import timer
 from armkit.planning.collision import CollisionChecker
 from armkit.planning.compiled import shortcut_compiled
 
@@ -43,7 +47,7 @@ def _point_at(p: NDArray, cum: NDArray, s: float) -> tuple[int, NDArray]:
 
 
 def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64,
-             min_gain: float = 0.01) -> NDArray:
+             min_gain: float = 0.01, deadline: NDArray | None = None) -> NDArray:
     """A shorter path through the same free space: random shortcuts, then greedy vertex
     reduction.
 
@@ -51,7 +55,10 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
     straight edge where it is free; greedy vertex reduction then joins each kept vertex to the
     farthest later vertex it reaches straight. A draw whose shortcut would save less than
     `min_gain` of the path's length is not checked (certifying a long edge near obstacles
-    costs many states for little).
+    costs many states for little). With a validity other than armkit's certified checker, the
+    two pieces of old edges a shortcut keeps (from the vertex before its first point, and to
+    the vertex after its last) are checked too: a sampled checker's edges are only as free as
+    the states it checked.
 
     Parameters
     ----------
@@ -64,6 +71,9 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
         Random shortcut attempts.
     min_gain : float
         The least saving worth checking, a fraction of the current path's length.
+    deadline : ndarray, optional
+        A `armkit.planning.clock.timer`: past it, no more shortcuts (the path so far is
+        returned).
 
     Returns
     -------
@@ -74,27 +84,31 @@ def shortcut(path: ArrayLike, validity, *, seed: int | None = 0, tries: int = 64
     if not (isinstance(min_gain, (int, float, np.floating)) and 0.0 <= min_gain < 1.0):
         raise InputError(f"min_gain: expected a fraction of the path's length in [0, 1), found "
                          f"{min_gain!r}")
+    deadline = timer(math.inf) if deadline is None else deadline
     if isinstance(validity, CollisionChecker):                  # compiled
-        return shortcut_compiled(validity, p, seed=seed, tries=tries, min_gain=min_gain)[0]
+        return shortcut_compiled(validity, p, seed=seed, tries=tries, min_gain=min_gain,
+                                 deadline=deadline)[0]
+    late = int(deadline[2])
     ends_in_edge = bool(getattr(validity, "edge_checks_ends", False))
     rng = np.random.default_rng(seed)
     draws = np.sort(rng.random((tries, 2)), axis=1)          # arc-length fractions, drawn once
     cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
     for f1, f2 in draws:
-        if len(p) < 3:
+        if len(p) < 3 or time.monotonic_ns() >= late:
             break
         i1, a = _point_at(p, cum, f1 * cum[-1])
         i2, b = _point_at(p, cum, f2 * cum[-1])
         if i1 == i2 or (f2 - f1) * cum[-1] - np.linalg.norm(b - a) < min_gain * cum[-1]:
             continue
         if (ends_in_edge or validity.valid_states(np.vstack([a, b])).all()) and \
-                validity.interior_free(a, b)[0]:
+                all(validity.interior_free(u, v)[0] for u, v in
+                    ((a, b), (p[i1], a), (b, p[i2 + 1]))):
             p = _drop_repeats(np.vstack([p[:i1 + 1], a, b, p[i2 + 1:]]))
             cum = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))]
     out, i = [p[0]], 0
     while i < len(p) - 1:
         for j in range(len(p) - 1, i, -1):
-            if j == i + 1 or validity.interior_free(p[i], p[j])[0]:
+            if j == i + 1 or (time.monotonic_ns() < late and validity.interior_free(p[i], p[j])[0]):
                 out.append(p[j])
                 i = j
                 break

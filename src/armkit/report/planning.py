@@ -46,8 +46,8 @@ def _draw_obstacle(ax, o, scale: float) -> None:
 
 
 def path_figure(checker, path: np.ndarray, units: Units | None = None) -> Figure:
-    """The arm's capsules at every waypoint of path (k, n) among the checker's obstacles, and
-    each joint along the path with its limits.
+    """The arm's parts (capsules, spheres) at every waypoint of path (k, n) among the checker's
+    obstacles, and each joint along the path with its limits.
 
     Parameters
     ----------
@@ -66,10 +66,14 @@ def path_figure(checker, path: np.ndarray, units: Units | None = None) -> Figure
     for o in scene:
         _draw_obstacle(ax, o, scale)
     colours = colormaps["viridis"](np.linspace(0, 1, len(path)))
+    spheres = np.all(geometry.a == geometry.b, axis=1)
     for q, colour in zip(path, colours):
         a, b = arm_capsules(robot, geometry, q)
-        for s, e in zip(a * scale, b * scale):
+        for s, e in zip(a[~spheres] * scale, b[~spheres] * scale):
             ax.plot(*np.array([s, e]).T, color=colour, linewidth=2.5, solid_capstyle="round")
+        if spheres.any():                   # sphere parts: their centres, sized by radius
+            ax.scatter(*(a[spheres] * scale).T, color=colour, alpha=0.35,
+                       s=(geometry.radius[spheres] * 400) ** 2, linewidths=0)
     tool = fk(robot, path)[:, :3, 3] * scale
     ax.plot(*tool.T, color="tab:red", linewidth=1.2, marker=".")
     points = np.vstack([tool, np.zeros((1, 3))] + [np.array([o.pose[:3, 3] if hasattr(o, "pose")
