@@ -41,7 +41,7 @@ from pydantic import Field
 
 from armkit.drives.registers import MAX_WRITE, JointRegister, RegisterMap
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import StrictModel, read_text, read_yaml, validated
+from armkit.io.documents import StrictModel, named_file, read_text, read_yaml, validated
 from armkit.model import Robot
 from armkit.io.robot_files import robot as load_robot_by_name
 
@@ -206,8 +206,7 @@ def _robot(spec: RegisterMapFile, path: str, given) -> Robot:
         raise ModelFileError(path, "robot", "the robot the map drives (a built-in name or a "
                              "robot file)", "nothing")
     try:
-        relative = Path(path).parent / spec.robot
-        return load_robot_by_name(relative if relative.is_file() else spec.robot)
+        return load_robot_by_name(named_file(spec.robot, path, "robot"))
     except ModelFileError:
         raise
     except (ArmkitError, OSError, ValueError) as err:   # ValueError: a NUL in the name
