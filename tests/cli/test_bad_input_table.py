@@ -139,7 +139,7 @@ ROWS: list[tuple[tuple[str, ...], str]] = [
     (("workspace", LONG), "robot: expected a built-in name or a robot file, found a name of"),
     (("workspace", "ur5", "--bogus"), "--bogus: expected an option of `armkit workspace`"),
     (("workspace", "ur5", "--out", "/dev/null/sub"), "--out: expected a folder armkit can "
-                                                     "write, found /dev/null/sub"),
+                                                     "write, found '/dev/null/sub'"),
     # traj
     (("traj", "ur5", "--start=0,0,0,0,0,0"), "expected start and goal"),
     (("traj", "ur5", "--start=0,0,0", "--goal=1,1,1"), "start: expected 6 joint values"),
@@ -205,8 +205,10 @@ ROWS: list[tuple[tuple[str, ...], str]] = [
     (("view", "ur5", "nan", "0", "0", "0", "0", "0"), "Q: expected a finite number"),
     (("view", "ur5", "1e308", "0", "0", "0", "0", "0"), "Q: expected a number from -1e+09"),
     (("view", LONG), "robot: expected a built-in name or a robot file, found a name of 300"),
-    (("view", "ur5", "--out", "view.png"), "--out: expected an .html file, found view.png"),
-    (("view", "ur5", "--out", "/dev/null/v.html"), "--out: expected a folder armkit can write"),
+    (("view", "ur5", "--out", "view.png"), "--out: expected a file ending in .html, .htm, found "
+                                           "'view.png'"),
+    (("view", "ur5", "--out", "/dev/null/v.html"), "--out: expected a file in an existing "
+                                                   "folder"),
     # plan, calibration, detect (their own tests hold their full tables)
     (("plan", "{tmp}/missing.yaml"), "{tmp}/missing.yaml: expected a readable file"),
     (("plan", "x.yaml", "--bogus"), "--bogus: expected an option of `armkit plan`"),

@@ -8,9 +8,11 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.text import Text
 
 from armkit.cli.command import (EXIT_FAILED, NUMBERS, JsonFlag, app, output_folder,
                                 print_json, stdout)
+from armkit.cli.values import output_path
 from armkit.cli.robots import RobotArg
 from armkit.cli.values import load_robot, number
 
@@ -38,7 +40,8 @@ def _job(task, out: Path, as_json: bool) -> None:
         with stdout.status("starting") as status:
             def on_step(step: str, detail: str) -> None:
                 if detail:
-                    stdout.print(f"  [green]done[/green] {STEP_NAMES[step]}: {detail}")
+                    stdout.print(Text.assemble(("  done", "green"),
+                                               f" {STEP_NAMES[step]}: {detail}"))
                 else:
                     status.update(f"{STEP_NAMES[step]} ...")
             result = run_task(task, on_step)
@@ -48,13 +51,14 @@ def _job(task, out: Path, as_json: bool) -> None:
     else:
         u = task.units
         if result.success:
-            stdout.print(f"[bold green]done[/bold green] in {time.perf_counter() - started:.1f} "
-                         f"s: the tool is {u.length_from_si(result.position_error):.4f} "
-                         f"{u.length} from the target (the drive's resolution allows "
-                         f"{u.length_from_si(result.resolution):.4f} {u.length})")
+            stdout.print(Text.assemble(
+                ("done", "bold green"), f" in {time.perf_counter() - started:.1f} "
+                f"s: the tool is {u.length_from_si(result.position_error):.4f} "
+                f"{u.length} from the target (the drive's resolution allows "
+                f"{u.length_from_si(result.resolution):.4f} {u.length})"))
         else:
             step = STEP_NAMES.get(result.stopped_at, result.stopped_at)
-            stdout.print(f"[bold red]stopped[/bold red] at {step}: {result.reason}", markup=True)
+            stdout.print(Text.assemble(("stopped", "bold red"), f" at {step}: {result.reason}"))
         stdout.print(f"report: {out / 'report.html'}")
     if not result.success:
         raise typer.Exit(EXIT_FAILED)
@@ -95,10 +99,8 @@ def view(robot: RobotArg,
     model = load_robot(robot)
     if q and len(q) != model.n:
         raise InputError(f"Q: expected {model.n} joint values for {model.name}, found {len(q)}")
-    if out.suffix.lower() not in (".html", ".htm"):
-        raise InputError(f"--out: expected an .html file, found {out}")
+    output_path(out, "--out", folder=False, formats=(".html", ".htm"))
     q_si = model.q_to_si(q) if q else np.clip(0.0, model.lower, model.upper)
-    output_folder(out.parent, "--out")
     write_view(robot_view(model, q_si, title=f"{model.name} at q = "
                           f"{np.round(model.q_from_si(q_si), 3).tolist()}"), out)
     stdout.print(f"view: {out}")

@@ -9,10 +9,12 @@ import typer
 from rich.table import Table
 
 from armkit.cli.command import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder, print_json, stdout
+from armkit.cli.values import shown
 from armkit.errors import InputError
 from armkit.model import SI
 
 PLANNERS = ("rrtconnect", "rrt", "rrtstar")
+MAX_WAYPOINTS = 100_000         # as planning files allow (armkit.io.scene)
 
 
 @app.command(name="plan")
@@ -32,13 +34,15 @@ def plan_command(
     from armkit.planning import CollisionChecker, arm_geometry, plan
 
     if planner is not None and planner not in PLANNERS:
-        raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found {planner!r}")
-    if waypoints is not None and waypoints < 2:
-        raise InputError(f"--waypoints: expected a whole number >= 2, found {waypoints}")
-    if out is not None:
-        out = output_folder(out)
+        raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found "
+                         f"{shown(planner)}")
+    if waypoints is not None and not 2 <= waypoints <= MAX_WAYPOINTS:
+        raise InputError(f"--waypoints: expected a whole number from 2 to {MAX_WAYPOINTS}, "
+                         f"found {waypoints}")
     problem = read_planning_problem(file)
     robot, units = problem.robot, (SI if si else problem.units)
+    if out is not None:
+        out = output_folder(out, files=(f"{robot.name}_path.png",))
     settings = dict(problem.settings)
     for key, value in (("planner", planner), ("seed", seed), ("waypoints", waypoints)):
         if value is not None:
