@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -138,9 +139,8 @@ def test_a_pipes_dark_mouth_is_not_a_hole():
     """A pipe's dark inside leaves the wall beyond its mouth without returns, and nothing in
     front of that patch along the rays: only the line of sight, which passes the pipe, shows
     it is no opening."""
-    from tests.fuzz.seeds import EXAMPLES
-
-    result = detect_target(EXAMPLES / "perception" / "inlet_scan.pcd", kind="hole")
+    scan = Path(__file__).resolve().parents[2] / "examples" / "perception" / "inlet_scan.pcd"
+    result = detect_target(scan, kind="hole")
     assert not result.success and "line of sight" in result.reason
     for seed in range(4):
         scene = random_scene(seed, "pipe", noise=0.002, n_points=30_000)
