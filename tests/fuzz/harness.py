@@ -16,18 +16,16 @@ from __future__ import annotations
 import argparse
 import functools
 import json
-import os
-import selectors
-import subprocess
 import sys
 import tempfile
 import time
 from collections import Counter
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from tests.fuzz.mutate import Case, generate
-from tests.fuzz.seeds import READERS, ROOT, close, digest, load
+from tests.io.fuzz_files import Worker
+from tests.fuzz.seeds import READERS, close, digest, load
 
 
 @functools.lru_cache(maxsize=None)
@@ -65,38 +63,6 @@ def serve() -> None:
         sys.stdout.flush()
 
 
-class Worker:
-    """A child process running `serve`, killed and restarted after a hang."""
-
-    def __init__(self):
-        self.process = None
-
-    def ask(self, case: Case, timeout: float) -> dict | None:
-        if self.process is None or self.process.poll() is not None:
-            env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-                p for p in (os.environ.get("PYTHONPATH"), str(ROOT)) if p)}
-            self.process = subprocess.Popen(
-                [sys.executable, "-c", "from tests.fuzz.harness import serve; serve()"],
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                text=True, env=env, cwd=ROOT)
-        self.process.stdin.write(json.dumps(asdict(case)) + "\n")
-        self.process.stdin.flush()
-        with selectors.DefaultSelector() as selector:
-            selector.register(self.process.stdout, selectors.EVENT_READ)
-            ready = selector.select(timeout)
-        line = self.process.stdout.readline() if ready else ""
-        if not line:
-            self.stop()
-            return None
-        return json.loads(line)
-
-    def stop(self):
-        if self.process is not None:
-            self.process.kill()
-            self.process.wait()
-            self.process = None
-
-
 def judge(case: Case, result: dict | None) -> str | None:
     """The kind of failure ("traceback", "hang", "silent") this result is, or None."""
     if result is None:
@@ -130,7 +96,7 @@ class Report:
 def run(readers, count: int, seed: int, timeout: float = 30.0) -> Report:
     """Generate and read `count` mutants of each reader; the report."""
     report = Report()
-    worker = Worker()
+    worker = Worker("tests.fuzz.harness")
     try:
         with tempfile.TemporaryDirectory() as scratch:
             for reader in readers:

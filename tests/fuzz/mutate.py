@@ -95,6 +95,15 @@ def _lines_damage(text: str, rng: random.Random) -> tuple[str, str]:
     return "\n".join(lines) + "\n", f"lines {i + 1} and {j + 1} swapped"
 
 
+def _random_damage(raw: bytes, rng: random.Random, lines: float) -> tuple[bytes, str, str]:
+    """Lines deleted, doubled or swapped (`lines` > 0), else bytes damaged: "either"."""
+    if lines > 0:
+        text, what = _lines_damage(raw.decode(), rng)
+        return text.encode(), "either", what
+    data, what = _damage(raw, rng)
+    return data, "either", what
+
+
 def _yaml_case(reader: str, raw: bytes, rng: random.Random) -> tuple[bytes, str, str]:
     document = yaml.safe_load(raw.decode())
     leaves = list(_leaves(document))
@@ -145,11 +154,7 @@ def _yaml_case(reader: str, raw: bytes, rng: random.Random) -> tuple[bytes, str,
         mutated = copy.deepcopy(document)
         _set(mutated, path, rng.choice(["text", None, [], {}, -1, 0, 1e6, -0.0]))
         return yaml_text(mutated).encode(), "either", f"{'.'.join(map(str, path))} replaced"
-    if roll < 0.88:
-        text, what = _lines_damage(raw.decode(), rng)
-        return text.encode(), "either", what
-    data, what = _damage(raw, rng)
-    return data, "either", what
+    return _random_damage(raw, rng, 0.88 - roll)
 
 
 def _csv_case(reader: str, raw: bytes, rng: random.Random) -> tuple[bytes, str, str]:
@@ -185,11 +190,7 @@ def _csv_case(reader: str, raw: bytes, rng: random.Random) -> tuple[bytes, str, 
         lines.insert(at, "# a comment")
         lines.insert(len(lines), "")
         return ("\n".join(lines) + "\n").encode(), "same", "a comment and a blank line"
-    if roll < 0.85:
-        text, what = _lines_damage(text, rng)
-        return text.encode(), "either", what
-    data, what = _damage(raw, rng)
-    return data, "either", what
+    return _random_damage(raw, rng, 0.85 - roll)
 
 
 def _replace_header(raw: bytes, key: bytes, value: bytes) -> bytes:
@@ -314,11 +315,7 @@ def _lines_case(reader: str, raw: bytes, rng: random.Random) -> tuple[bytes, str
         i = rng.choice(numeric)
         lines[i] = lines[i] + " 1"
         return ("\n".join(lines) + "\n").encode(), "refuse", f"line {i + 1}: a number more"
-    if roll < 0.8:
-        text, what = _lines_damage(raw.decode(), rng)
-        return text.encode(), "either", what
-    data, what = _damage(raw, rng)
-    return data, "either", what
+    return _random_damage(raw, rng, 0.8 - roll)
 
 
 def _json_case(reader: str, raw: bytes, rng: random.Random) -> tuple[bytes, str, str]:

@@ -18,31 +18,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from tests.io.test_scene import MOVEIT_OLD as MOVEIT
+
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"
-
-MOVEIT = """cell
-* table
-1
-box
-1.0 2.0 0.1
-0.5 0 0.4
-0 0 0 1
-0.5 0.5 0.5 1
-* post
-2
-cylinder
-0.05 1.0
-0 0.5 0.5
-0 0 0.7071068 0.7071068
-1 0 0 1
-sphere
-0.1
-0 0 1.2
-0 0 0 1
-0 0 1 1
-.
-"""
 
 PLAN = """units: {length: mm, angle: deg}
 robot: inspection_6dof
