@@ -44,7 +44,8 @@ def _pose(T: np.ndarray, k: float) -> dict:
 
 def _candidate(c, k: float) -> dict:
     """A weighed candidate as the JSON shows it, lengths in the file's units."""
-    return {"kind": c.kind, "size": c.size, "centre": c.centre * k, "radius": c.radius * k,
+    return {"kind": c.kind, "size": c.size, "centre": c.centre * k,
+            "centroid": c.centroid * k, "radius": c.radius * k,
             "fit_rms": c.fit_rms * k, "rms_limit": c.rms_limit * k,
             "arc_deg": np.degrees(c.coverage), "standoff": c.standoff * k,
             "passed": c.passed, "reason": c.reason}

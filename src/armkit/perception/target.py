@@ -86,6 +86,8 @@ class Candidate:
         Points of the cluster, or rim estimates of the opening.
     centre : ndarray, shape (3,)
         The circle's centre on the wall (NaN if none was fitted).
+    centroid : ndarray, shape (3,)
+        Where its points are: the cluster's, or the rim estimates' centroid on the wall.
     radius, fit_rms, rms_limit : float
         The fitted circle's radius and RMS, and the largest RMS the scan's noise allows.
     coverage : float
@@ -101,6 +103,7 @@ class Candidate:
     kind: str
     size: int
     centre: NDArray
+    centroid: NDArray
     radius: float
     fit_rms: float
     rms_limit: float
@@ -116,8 +119,8 @@ class Candidate:
 
     def describe(self, file_scale: float = 1e3, unit: str = "mm") -> str:
         """One phrase: what and where it is, in `unit` (file_scale per m)."""
-        where = ", ".join(f"{x * file_scale:.4g}" for x in self.centre) \
-            if np.isfinite(self.centre).all() else "no circle"
+        where = ", ".join(f"{x * file_scale:.4g}" for x in self.centroid) \
+            if np.isfinite(self.centroid).all() else "nowhere"
         what = "points" if self.kind == "pipe" else "rim estimates"
         return f"{self.size} {what} at ({where}) {unit}"
 
@@ -306,29 +309,35 @@ def _weigh_pipe(points: NDArray, xy: NDArray, h: NDArray, normal: NDArray, scan:
     on_circle = float(np.mean(np.abs(res) <= limit))
     inside = float(np.mean(res < -limit))
     centre = origin + circle.centre[0] * u + circle.centre[1] * v
-    mm = 1e3
-    if why != "ok":
-        pass
-    elif not (np.isfinite(circle.radius) and 0 < circle.radius <= extent):
-        why = (f"it fits a circle of radius {circle.radius * mm:.4g} mm, not within 0 .. "
-               f"{extent * mm:.0f} mm")
-    elif rms > limit:
-        why = (f"it fits a circle with an RMS of {rms * mm:.3g} mm where the range noise "
-               f"({scan.range_noise * mm:.3g} mm) allows {limit * mm:.3g} mm (not a pipe's "
-               "side)")
-    elif inside > MAX_INSIDE:
-        why = (f"{inside:.0%} of its points lie inside its circle (a closed face: a box, a "
-               "dome, a bolt, not a pipe's open mouth)")
-    elif on_circle < MIN_ON_CIRCLE:
-        why = (f"only {on_circle:.0%} of its points lie on its circle (within "
-               f"{limit * mm:.3g} mm; a pipe's side puts at least {MIN_ON_CIRCLE:.0%} there)")
-    elif circle.coverage < MIN_ARC:
-        why = (f"its points span {np.degrees(circle.coverage):.0f} deg of the circle, fewer than "
-               f"{np.degrees(MIN_ARC):.0f}: too short an arc to fit")
+    if why == "ok":
+        why = _pipe_evidence(circle, rms, limit, inside, on_circle, extent, scan.range_noise)
     standoff = float(np.percentile(h, 99))
-    candidate = Candidate("pipe", len(points), centre, float(circle.radius), rms, limit,
-                          circle.coverage, standoff, float(np.linalg.norm(centre)), why)
+    candidate = Candidate("pipe", len(points), centre, points.mean(axis=0),
+                          float(circle.radius), rms, limit, circle.coverage, standoff,
+                          float(np.linalg.norm(centre)), why)
     return candidate, circle
+
+
+def _pipe_evidence(circle: Circle, rms: float, limit: float, inside: float, on_circle: float,
+                   extent: float, range_noise: float) -> str:
+    """"ok", or the first piece of evidence against a cluster being a pipe."""
+    mm = 1e3
+    if not (np.isfinite(circle.radius) and 0 < circle.radius <= extent):
+        return (f"it fits a circle of radius {circle.radius * mm:.4g} mm, not within 0 .. "
+                f"{extent * mm:.0f} mm")
+    if rms > limit:
+        return (f"it fits a circle with an RMS of {rms * mm:.3g} mm where the range noise "
+                f"({range_noise * mm:.3g} mm) allows {limit * mm:.3g} mm (not a pipe's side)")
+    if inside > MAX_INSIDE:
+        return (f"{inside:.0%} of its points lie inside its circle (a closed face: a box, a "
+                "dome, a bolt, not a pipe's open mouth)")
+    if on_circle < MIN_ON_CIRCLE:
+        return (f"only {on_circle:.0%} of its points lie on its circle (within "
+                f"{limit * mm:.3g} mm; a pipe's side puts at least {MIN_ON_CIRCLE:.0%} there)")
+    if circle.coverage < MIN_ARC:
+        return (f"its points span {np.degrees(circle.coverage):.0f} deg of the circle, fewer "
+                f"than {np.degrees(MIN_ARC):.0f}: too short an arc to fit")
+    return "ok"
 
 
 def _ranked(candidates: list[Candidate], choose: str) -> list[Candidate]:
@@ -545,7 +554,8 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
             if spread > extent:
                 centre = p[members].mean(axis=0)
                 considered.append(Candidate(
-                    "pipe", len(members), centre, float("nan"), float("nan"), float("nan"), 0.0,
+                    "pipe", len(members), np.full(3, np.nan), centre, float("nan"),
+                    float("nan"), float("nan"), 0.0,
                     float(np.percentile(h[members], 99)), float(np.linalg.norm(centre)),
                     f"it reaches {spread * 1e3:.0f} mm from its centre along the wall, more "
                     f"than {extent * 1e3:.0f} mm (larger than the inlet)"))
@@ -591,12 +601,14 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
 
 def _hole_candidate(opening: Opening, origin: NDArray, u: NDArray, v: NDArray) -> Candidate:
     c = opening.circle
+    rim = opening.rim.mean(axis=0) if len(opening.rim) else np.full(2, np.nan)
+    centroid = origin + rim[0] * u + rim[1] * v
     if c is None:
-        centre = np.full(3, np.nan)
-        return Candidate("hole", len(opening.rim), centre, float("nan"), float("nan"),
-                         opening.rms_limit, 0.0, 0.0, float("nan"), opening.reason)
+        return Candidate("hole", len(opening.rim), np.full(3, np.nan), centroid, float("nan"),
+                         float("nan"), opening.rms_limit, 0.0, 0.0, float("nan"),
+                         opening.reason)
     centre = origin + c.centre[0] * u + c.centre[1] * v
-    return Candidate("hole", len(opening.rim), centre, float(c.radius), c.rms,
+    return Candidate("hole", len(opening.rim), centre, centroid, float(c.radius), c.rms,
                      opening.rms_limit, c.coverage, 0.0, float(np.linalg.norm(centre)),
                      opening.reason)
 
