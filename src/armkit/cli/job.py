@@ -12,9 +12,8 @@ from rich.text import Text
 
 from armkit.cli.command import (EXIT_FAILED, NUMBERS, JsonFlag, app, output_folder,
                                 print_json, stdout)
-from armkit.cli.values import output_path
 from armkit.cli.robots import RobotArg
-from armkit.cli.values import load_robot, number
+from armkit.cli.values import load_robot, number, output_path
 
 STEP_NAMES = {"target": "target to the base frame", "drive": "the arm's joints from the drive",
               "ik": "inverse kinematics", "plan": "collision-free path",

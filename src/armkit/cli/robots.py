@@ -7,8 +7,8 @@ from typing import Annotated
 
 import numpy as np
 import typer
-from rich.text import Text
 from rich.table import Table
+from rich.text import Text
 
 import armkit
 from armkit.cli.command import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout

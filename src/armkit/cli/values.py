@@ -20,10 +20,11 @@ from typing import Any
 import typer
 
 from armkit.errors import ArmkitError, InputError
+from armkit.io.documents import LARGEST
 
 # Coordinates and joint values in file units (mm or m, deg or rad): 1e9 mm is 1000 km, far past
 # any arm, and well inside the range where squares and sums of floats stay finite.
-COORDINATE = 1e9
+COORDINATE = LARGEST
 # Limits typed by the user (velocity, acceleration, jerk), file units per s, s^2, s^3.
 LIMIT = (1e-6, 1e9)
 DURATION = (1e-6, 1e6)            # s: a microsecond to about eleven days

@@ -38,7 +38,7 @@ import numpy as np
 from pydantic import Field
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import (Value, Positive, StrictModel, UnitsField, bounded, read_yaml,
+from armkit.io.documents import (Positive, StrictModel, UnitsField, Value, bounded, read_yaml,
                                  validated, whole)
 from armkit.io.scene import Obstacle
 from armkit.io.robot_files import MAX_LENGTH

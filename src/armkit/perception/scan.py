@@ -31,12 +31,15 @@ START_BAND = 0.08       # m: RANSAC's first band and the widest: a wall with 23 
 BAND_SIGMAS = 3.5       # the wall's band in robust standard deviations of its residuals
 MIN_BAND = 5e-4         # m: the narrowest band (noise-free synthetic data, float32 files)
 MAD_TO_SIGMA = 1.4826   # a normal distribution's standard deviation per median absolute deviation
+SAMPLE = 20_000         # points a robust deviation or a typical spacing is measured on
 
 
 def robust_sigma(x: NDArray) -> float:
-    """1.4826 x the median absolute deviation of x from its median (0 for fewer than 2)."""
+    """1.4826 x the median absolute deviation of x from its median (0 for fewer than 2), on
+    at most `SAMPLE` of them (evenly spaced: a robust deviation needs no more)."""
     if len(x) < 2:
         return 0.0
+    x = x[::max(len(x) // SAMPLE, 1)]
     return float(MAD_TO_SIGMA * np.median(np.abs(x - np.median(x))))
 
 
@@ -59,7 +62,7 @@ class Scan:
     ring_gap : float
         Typical distance between neighbouring rows (rings) on the wall (m), 0 for no rows.
     rings : ndarray, shape (N,), int, or None
-        Each point's row (ring; -1: none), when the scan has rows.
+        Each point's row (ring; -1: none), when the scan has rows and they were asked for.
     ring_count : int
         Rows crossing the wall, 0 for a cloud without rows.
     """
@@ -92,21 +95,24 @@ def wall_plane(p: NDArray, band: float | None = None, seed: int | None = 0) -> t
         return plane, band or START_BAND, float("nan")
     normal, offset = plane.normal, plane.offset
     width = band or START_BAND
-    for _ in range(4):
-        h = p @ normal + offset
+    # The band adapts on a sample of the points (a band needs no more); the last fit uses all.
+    sample = p[::max(len(p) // SAMPLE, 1)]
+    for _ in range(4 if band is None else 0):
+        h = sample @ normal + offset
         inliers = np.abs(h) < width
         if inliers.sum() < 3:
             break
-        normal, offset, _ = fit_plane_lsq(np.compress(inliers, p, axis=0))
-        h = p @ normal + offset
-        sigma = robust_sigma(h[np.abs(h) < width])
-        if band is not None:
-            break
-        new = float(np.clip(BAND_SIGMAS * sigma, MIN_BAND, START_BAND))
-        if abs(new - width) < 0.02 * width:
-            width = new
-            break
+        normal, offset, _ = fit_plane_lsq(np.compress(inliers, sample, axis=0))
+        h = sample @ normal + offset
+        new = float(np.clip(BAND_SIGMAS * robust_sigma(h[np.abs(h) < width]), MIN_BAND,
+                            START_BAND))
+        converged = abs(new - width) < 0.02 * width
         width = new
+        if converged:
+            break
+    inliers = np.abs(p @ normal + offset) < width
+    if inliers.sum() >= 3:
+        normal, offset, _ = fit_plane_lsq(np.compress(inliers, p, axis=0))
     h = p @ normal + offset
     inliers = np.abs(h) < width
     sigma = robust_sigma(h[inliers])
@@ -119,9 +125,10 @@ def _elevation_azimuth(p: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def _rows(elevation: NDArray) -> tuple[NDArray, float] | None:
-    """Rows of (nearly) equal elevation among sorted-able `elevation` values: their centres
-    and the typical angular gap between neighbouring rows, or None if there are none."""
-    e = np.sort(elevation)
+    """Rows of (nearly) equal elevation among `elevation` values (a sample of at most
+    `SAMPLE` of them: every row of a scan has many points): their centres and the typical
+    angular gap between neighbouring rows, or None if there are none."""
+    e = np.sort(elevation[::max(len(elevation) // SAMPLE, 1)])
     d = np.diff(e)
     if len(d) < 10:
         return None
@@ -140,21 +147,24 @@ def _rows(elevation: NDArray) -> tuple[NDArray, float] | None:
     return centres, float(np.median(np.diff(centres)))
 
 
-def _step_along(elevation_row: NDArray, azimuth: NDArray) -> float:
-    """Median azimuth step (rad) between neighbouring points of the same row."""
-    order = np.lexsort((azimuth, elevation_row))
-    same = elevation_row[order][1:] == elevation_row[order][:-1]
-    steps = np.diff(azimuth[order])[same]
+def _step_along(row_of: NDArray, azimuth: NDArray, rows: int = 8) -> float:
+    """Median azimuth step (rad) between neighbouring points of the same row, measured on
+    the `rows` rows with the most points."""
+    counts = np.bincount(row_of)
+    chosen = np.isin(row_of, np.argsort(counts)[-rows:])
+    r, az = row_of[chosen], azimuth[chosen]
+    order = np.lexsort((az, r))
+    same = r[order][1:] == r[order][:-1]
+    steps = np.diff(az[order])[same]
     steps = steps[steps > 0]
     return float(np.median(steps)) if len(steps) else 0.0
 
 
-def _wall_scale(p: NDArray, plane: Plane) -> tuple[NDArray, NDArray]:
-    """Per point, metres on the wall per radian of elevation and of azimuth (the derivative
-    of where a ray meets the wall)."""
-    r = np.linalg.norm(p, axis=1)
-    d = p / np.maximum(r, 1e-12)[:, None]
-    e, a = _elevation_azimuth(p)
+def _wall_scale(p: NDArray, e: NDArray, a: NDArray, plane: Plane) -> tuple[float, float]:
+    """Typical metres on the wall per radian of elevation and of azimuth (the derivative of
+    where a ray meets the wall), the medians over points `p` (k, 3) at elevations `e` and
+    azimuths `a`."""
+    d = p / np.maximum(np.linalg.norm(p, axis=1), 1e-12)[:, None]
     de = np.stack([-np.sin(e) * np.cos(a), -np.sin(e) * np.sin(a), np.cos(e)], axis=1)
     da = np.stack([-np.cos(e) * np.sin(a), np.cos(e) * np.cos(a), np.zeros_like(e)], axis=1)
     dn = d @ plane.normal
@@ -162,14 +172,14 @@ def _wall_scale(p: NDArray, plane: Plane) -> tuple[NDArray, NDArray]:
     t = -plane.offset / dn
 
     def scale(dd):
-        return np.linalg.norm(t[:, None] * (dd - d * ((dd @ plane.normal) / dn)[:, None]),
-                              axis=1)
+        return float(np.median(np.linalg.norm(
+            t[:, None] * (dd - d * ((dd @ plane.normal) / dn)[:, None]), axis=1)))
 
     return scale(de), scale(da)
 
 
 def measure_scan(p: NDArray, rings: NDArray | None = None, band: float | None = None,
-                 seed: int | None = 0) -> Scan | None:
+                 seed: int | None = 0, *, labels: bool = True) -> Scan | None:
     """The wall and structure of scan `p` (N, 3), m; None when no plane holds 3 points.
 
     Parameters
@@ -181,24 +191,25 @@ def measure_scan(p: NDArray, rings: NDArray | None = None, band: float | None = 
         The wall's band (m); None to adapt it.
     seed : int or None
         RANSAC's seed.
+    labels : bool
+        Whether to give every point its row (`Scan.rings`, for an opening's search); without,
+        only the spacings are measured.
     """
     plane, width, sigma = wall_plane(p, band, seed)
     inl = plane.inliers
     if inl.sum() < 3:
         return None
     q = np.compress(inl, p, axis=0)
-    cos = np.abs(q @ plane.normal) / np.maximum(np.linalg.norm(q, axis=1), 1e-12)
-    h = q @ plane.normal + plane.offset
-    noise = robust_sigma(h / np.maximum(cos, 0.05))
+    sample = q[::max(len(q) // SAMPLE, 1)]
+    cos = np.abs(sample @ plane.normal) / np.maximum(np.linalg.norm(sample, axis=1), 1e-12)
+    noise = robust_sigma((sample @ plane.normal + plane.offset) / np.maximum(cos, 0.05))
     e, a = _elevation_azimuth(q)
-    per_e, per_a = _wall_scale(q, plane)
     row_of = None
     if rings is not None:
-        labels = np.asarray(rings)[inl]
-        ids, row_of = np.unique(labels, return_inverse=True)
-        centres = np.array([np.median(e[row_of == k]) for k in range(len(ids))]) \
-            if len(ids) <= 4096 else None
-        found = None if centres is None or len(ids) < 2 else \
+        ids, row_of = np.unique(np.asarray(rings)[inl], return_inverse=True)
+        centres = (np.bincount(row_of, weights=e) / np.bincount(row_of)) \
+            if len(ids) >= 2 else None
+        found = None if centres is None else \
             (np.sort(centres), float(np.median(np.diff(np.sort(centres)))))
     else:
         found = _rows(e)
@@ -206,22 +217,21 @@ def measure_scan(p: NDArray, rings: NDArray | None = None, band: float | None = 
         centres, gap_angle = found
         if row_of is None:
             row_of = np.clip(np.searchsorted(centres, e - gap_angle / 2), 0, len(centres) - 1)
-        step = _step_along(row_of.astype(float), a)
+        step = _step_along(row_of, a)
         if step > 0:
-            along = float(np.median(per_a) * step)
-            across = float(np.median(per_e) * gap_angle)
-            point_rings = _ring_labels(p, centres, gap_angle, rings)
-            return Scan(plane, width, sigma, noise, along, across, point_rings,
-                        int(len(centres)))
-    xy_span = _spacing(q, plane)
-    return Scan(plane, width, sigma, noise, xy_span, 0.0, None, 0)
+            every = max(len(q) // 4000, 1)
+            per_e, per_a = _wall_scale(q[::every], e[::every], a[::every], plane)
+            point_rings = (None if not labels else np.asarray(rings).astype(np.int64)
+                           if rings is not None
+                           else _ring_labels(_elevation_azimuth(p)[0], centres, gap_angle))
+            return Scan(plane, width, sigma, noise, per_a * step, per_e * gap_angle,
+                        point_rings, int(len(centres)))
+    return Scan(plane, width, sigma, noise, _spacing(q, plane), 0.0, None, 0)
 
 
-def _ring_labels(p: NDArray, centres: NDArray, gap: float, rings: NDArray | None) -> NDArray:
-    """Each point's ring: the file's, or the nearest row within a third of a gap (else -1)."""
-    if rings is not None:
-        return np.asarray(rings).astype(np.int64)
-    e, _ = _elevation_azimuth(p)
+def _ring_labels(e: NDArray, centres: NDArray, gap: float) -> NDArray:
+    """Each point's row from its elevation `e`: the nearest row within a third of a gap (else
+    -1)."""
     k = np.clip(np.searchsorted(centres, e), 1, len(centres) - 1)
     nearer = np.where(np.abs(e - centres[k - 1]) < np.abs(e - centres[k]), k - 1, k)
     return np.where(np.abs(e - centres[nearer]) < gap / 3, nearer, -1)

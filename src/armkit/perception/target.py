@@ -480,7 +480,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     k_file = 1e3 if info.get("file_units", "m") == "mm" else 1.0
     unit = info.get("file_units", "m")
 
-    scan = measure_scan(p, rings, plane_threshold, seed)
+    scan = measure_scan(p, rings, plane_threshold, seed, labels=kind == "hole")
     if scan is None or scan.plane.inliers.sum() < max(50, 0.05 * n):
         held = 0 if scan is None else int(scan.plane.inliers.sum())
         return _fail(f"no wall: the best plane holds {held} of {n} points", kind, radius, p,
@@ -502,7 +502,7 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     extent = 3 * radius if radius is not None else max_extent
 
     if kind == "hole":
-        find = row_openings if scan.rings is not None else grid_openings
+        find = row_openings if scan.ring_count else grid_openings
         openings = find(p, scan, u, v, radius, extent)
         considered = [_hole_candidate(o, origin, u, v) for o in openings]
         info["considered"] = considered
