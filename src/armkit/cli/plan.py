@@ -9,7 +9,8 @@ import typer
 from rich.table import Table
 
 from armkit.cli.command import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder, print_json, stdout
-from armkit.cli.values import shown
+from armkit.cli.values import number, shown
+from armkit.io.documents import SEED
 from armkit.errors import InputError
 from armkit.model import SI
 
@@ -23,7 +24,8 @@ def plan_command(
                                               "goal or goal_pose, planner settings.")],
     planner: Annotated[str | None, typer.Option(
         help=f"One of {', '.join(PLANNERS)} (default: the file's, else rrtconnect).")] = None,
-    seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).")] = None,
+    seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).",
+                                             parser=number(*SEED, integer=True))] = None,
     waypoints: Annotated[int | None, typer.Option(
         help="Resample the path to N waypoints evenly spaced in joint space.")] = None,
     out: Annotated[Path | None, typer.Option(

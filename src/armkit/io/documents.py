@@ -126,6 +126,10 @@ Fraction = bounded(0.0, 1.0)
 """A number from 0 to 1."""
 
 
+SEED = (0, 2**32 - 1)
+"""A random seed's range, in files and on the command line (32 bits, as most tools take)."""
+
+
 def whole(low: int, high: int) -> Any:
     """A whole-number field from `low` to `high` (``true``, ``1.0`` and ``"3"`` are not)."""
     return bounded(low, high, integer=True)

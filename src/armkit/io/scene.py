@@ -34,8 +34,8 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import (Fraction, Positive, StrictModel, UnitsField, Value, bounded,
-                                 checked_path, found_text, named_file, number_from_text,
+from armkit.io.documents import (SEED, Fraction, Positive, StrictModel, UnitsField, Value,
+                                 bounded, checked_path, found_text, named_file, number_from_text,
                                  read_text, read_yaml, validated, whole)
 from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
@@ -103,7 +103,7 @@ class _PoseField(StrictModel):
 
 class _PlannerField(StrictModel):
     name: Literal["rrtconnect", "rrt", "rrtstar"] = "rrtconnect"
-    seed: whole(0, 2**63 - 1) = 0
+    seed: whole(*SEED) = 0
     resolution: Positive | None = None
     step: Positive | None = None
     max_iterations: whole(1, 100_000_000) | None = None

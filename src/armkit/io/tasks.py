@@ -38,8 +38,8 @@ import numpy as np
 from pydantic import Field
 
 from armkit.errors import ArmkitError, ModelFileError
-from armkit.io.documents import (Positive, StrictModel, UnitsField, Value, bounded, read_yaml,
-                                 validated, whole)
+from armkit.io.documents import (SEED, Positive, StrictModel, UnitsField, Value, bounded,
+                                 read_yaml, validated, whole)
 from armkit.io.scene import Obstacle
 from armkit.io.robot_files import MAX_LENGTH
 from armkit.model.robot import Units
@@ -76,7 +76,7 @@ class SceneField(StrictModel):
 
 class PlannerField(StrictModel):
     name: Literal["rrtconnect", "rrt", "rrtstar"] = "rrtconnect"
-    seed: whole(0, 2**63 - 1) = 0
+    seed: whole(*SEED) = 0
     time_limit: bounded(0.0, 3600.0, low_open=True) = 5.0
     max_iterations: whole(1, 10_000_000) | None = None
     resolution: Positive | None = None               # length units: how far any arm point moves
