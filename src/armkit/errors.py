@@ -7,6 +7,18 @@ these are for misuse and bad input, with messages that say what was expected and
 from __future__ import annotations
 
 
+MESSAGE_CHARS = 300
+"""The longest message of a ModelFileError (the file, field, expected and found, cut to fit)."""
+
+
+def cut(text: str, limit: int) -> str:
+    """`text` if at most `limit` characters, else its start and end around "..."."""
+    if len(text) <= limit:
+        return text
+    keep = limit - 3
+    return text[:keep - keep // 3] + "..." + text[len(text) - keep // 3:]
+
+
 class ArmkitError(Exception):
     """Base of every error armkit raises on purpose."""
 
@@ -33,8 +45,13 @@ class ModelFileError(InputError):
 
     def __init__(self, file: str, field: str, expected: str, found: str):
         self.file, self.field, self.expected, self.found = str(file), field, expected, found
-        where = f"{self.file}: {field}" if field else self.file
-        super().__init__(f"{where}: expected {expected}, found {found}")
+        # At most MESSAGE_CHARS in all, however long the file's name or the value: the file
+        # and the field first, then what was expected, then what was found, each cut to fit.
+        name = cut(self.file, 100)
+        where = f"{name}: {cut(field, 60)}" if field else name
+        expected = cut(str(expected), max(MESSAGE_CHARS - len(where) - 30, 40))
+        head = f"{where}: expected {expected}, found "
+        super().__init__(head + cut(str(found), max(MESSAGE_CHARS - len(head), 20)))
 
 
 class DriveError(ArmkitError):

@@ -164,7 +164,7 @@ def test_accuracy(tmp_path):
 def test_accuracy_bad_input(tmp_path):
     example = EXAMPLES / "inspection_6dof_accuracy.csv"
     _bad_input(armkit_cli("accuracy", example, "--tolerance", "-1"),
-               "--tolerance: expected a positive length in mm, found -1")
+               "--tolerance: expected a number above 0 and at most 1e+09, found -1")
     _bad_input(armkit_cli("accuracy", tmp_path / "missing.csv"), "missing.csv",
                "expected a readable file")
     bad = tmp_path / "bad.csv"

@@ -113,8 +113,9 @@ def test_no_drive_listening_is_a_failed_send(csv_file):
     (CSV, str(WATER), "expected a header naming each joint of water_supply"),
     (CSV, "missing.map.yaml", "missing.map.yaml: expected a readable file"),
     (CSV.replace("1,10,20,30", "1,10,nan,30"), MAP,
-     "wp.csv: line 3: expected finite numbers, found 1, 10, nan, 30, 40, 50, 60 (nan is not)"),
-    (CSV.replace("2,20,30", "2,inf,30"), MAP, "wp.csv: line 4: expected finite numbers"),
+     "wp.csv: line 3, column 3: expected a valid number from -1e+09 to 1e+09, found 'nan'"),
+    (CSV.replace("2,20,30", "2,inf,30"), MAP, "wp.csv: line 4, column 2: expected a valid "
+                                              "number"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, content, map_path, words):
     path = tmp_path / "wp.csv"
@@ -171,7 +172,8 @@ def test_nan_in_a_json_waypoint_file_names_the_field(tmp_path):
     path.write_text('{"q": [[0, 0, 0, 0, 0, 0], [1, 2, NaN, 4, 5, 6]]}')
     result = run("send", str(path), "--map", MAP, "--dry-run")
     assert result.exit_code == 2
-    assert f"{path}: q[1][2]: expected finite numbers, found nan" in result.stderr
+    assert f"{path}: q[1][2]: expected a finite number from -1e+09 to 1e+09, found nan" \
+        in result.stderr
 
 
 def test_send_and_sim_drive_share_one_default_port():

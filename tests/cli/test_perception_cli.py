@@ -70,12 +70,18 @@ def test_text_output_and_no_target_exit_1(tmp_path):
     ([SCAN, "--kind", "slot"], "--kind: expected one of pipe, hole, found 'slot'"),
     ([SCAN, "--choose", "first"], "--choose: expected one of largest, nearest, highest, found"),
     ([SCAN, "--nonfinite", "keep"], "--nonfinite: expected one of drop, refuse, found 'keep'"),
-    ([SCAN, "--radius", "-4"], "--radius: expected a positive length in mm, found -4"),
-    ([SCAN, "--radius", "nan"], "--radius: expected a positive length in mm, found nan"),
-    ([SCAN, "--radius", "4cm"], "--radius: expected a positive length in the cloud's units, "
-                                "found '4cm'"),
-    ([SCAN, "--eps", "0"], "--eps: expected a positive length in mm, found 0"),
-    ([SCAN, "--eps", "x"], "--eps: expected a positive length in the cloud's units, found 'x'"),
+    ([SCAN, "--radius", "-4"], "--radius: expected a number above 0 and at most 1e+09 (the "
+                               "cloud's units), found -4"),
+    ([SCAN, "--radius", "nan"], "--radius: expected a finite number above 0"),
+    ([SCAN, "--radius", "1e300"], "--radius: expected a number above 0 and at most 1e+09"),
+    ([SCAN, "--radius", "2e6"], "--radius: expected a length of at most 1000 m (1e+06 mm), "
+                                "found 2e+06 mm"),
+    ([SCAN, "--radius", "4cm"], "--radius: expected a number above 0 and at most 1e+09 (the "
+                                "cloud's units), found '4cm'"),
+    ([SCAN, "--eps", "0"], "--eps: expected a number above 0 and at most 1e+09 (the cloud's "
+                           "units), found 0"),
+    ([SCAN, "--eps", "x"], "--eps: expected a number above 0 and at most 1e+09 (the cloud's "
+                           "units), found 'x'"),
     ([SCAN, "--out", "{file}"], "--out: expected a folder armkit can write, found "),
     ([SCAN, "--sensor-to-base", "{tf}"], "tf.yaml: units: expected a value, found nothing"),
     (["{nan}", "--units", "m", "--nonfinite", "refuse"], "n.npy: points: expected finite coordinates, found 1 "

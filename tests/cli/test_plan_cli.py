@@ -71,10 +71,16 @@ def test_bad_input_one_line_exit_2(tmp_path):
     cases = [
         (["plan", str(tmp_path / "missing.yaml")], "missing.yaml"),
         (["plan", SHELF, "--planner", "prm"], "--planner: expected one of"),
-        (["plan", SHELF, "--waypoints", "1"], "--waypoints: expected a whole number >= 2"),
+        (["plan", SHELF, "--waypoints", "1"], "--waypoints: expected a whole number from 2 "
+                                              "to 100000, found 1"),
+        (["plan", SHELF, "--waypoints", "200000000"], "--waypoints: expected a whole number "
+                                                      "from 2 to 100000"),
+        (["plan", SHELF, "--out", str(tmp_path / "shelf.yaml")], "--out: expected a folder, "
+                                                                 "found"),
         (["plan", SHELF, "--time-limit", "-1"], "--time-limit: expected seconds >= 0"),
         (["plan", SHELF, "--time-limit", "nan"], "--time-limit: expected seconds >= 0"),
     ]
+    (tmp_path / "shelf.yaml").write_text("a file where the folder should be")
     bad = tmp_path / "bad.yaml"
     bad.write_text("units: {length: mm, angle: deg}\nobstacles:\n  - {type: cone}\n")
     cases.append((["plan", str(bad)], "obstacles[0]"))

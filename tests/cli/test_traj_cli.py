@@ -210,9 +210,9 @@ def test_within_the_limits_says_so_and_exits_0(tmp_path):
 
 @pytest.mark.parametrize("text, words", [
     ("robot: ur5\nstart: [0, 0, 0, 0, 0, 0]\ngoal: [1, 0, 0, 0, 0, 1e308]\n",
-     "goal: expected numbers from -1e+09 to 1e+09, found 1e+308"),
+     "goal[5]: expected a number from -1e+09 to 1e+09, found 1e+308"),
     ("robot: ur5\nstart: [0, 0, 0, 0, 0, 0]\ngoal: [1, 0, 0, 0, 0, 1]\nduration: 1e308\n",
-     "duration: expected less than or equal to 1000000"),
+     "duration: expected a number above 0 and at most 1e+06, found 1e+308"),
     ("robot: ur5\nstart: [0, 0, 0, 0, 0, 0]\ngoal: [1, 0, 0, 0, 0, 1]\njerk: 1e-300\n",
      "jerk: expected numbers from 1e-06 to 1e+09, found 1e-300"),
     ("robot: " + "x" * 300 + "\nstart: [0]\ngoal: [1]\n", "robot: expected a built-in name"),

@@ -5,7 +5,6 @@ files either load to finite dynamics or are refused by name."""
 
 from __future__ import annotations
 
-import dataclasses
 import re
 from pathlib import Path
 

@@ -622,17 +622,19 @@ class Report:
 
 
 class Worker:
-    """A child process running `serve`, restarted after a hang."""
+    """A child process running `module`'s `serve` (this module's by default), restarted after
+    a hang."""
 
-    def __init__(self):
+    def __init__(self, module: str = "tests.io.fuzz_files"):
         self.process = None
+        self.module = module
 
     def start(self):
         root = str(Path(__file__).resolve().parents[2])
         env = {**os.environ, "PYTHONPATH": os.pathsep.join(
             [p for p in (os.environ.get("PYTHONPATH"), root) if p])}
         self.process = subprocess.Popen(
-            [sys.executable, "-c", "from tests.io.fuzz_files import serve; serve()"],
+            [sys.executable, "-c", f"from {self.module} import serve; serve()"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
             text=True, env=env, cwd=root)
 

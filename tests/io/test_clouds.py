@@ -31,7 +31,7 @@ def test_pcd_ascii_in_millimetres(tmp_path):
     rows = "\n".join(" ".join(f"{v:.6f}" for v in row) for row in POINTS * 1000)
     path = write(tmp_path, "a.pcd", pcd_header(len(POINTS), "ascii") + rows.encode())
     cloud = read_cloud(path)
-    assert cloud.units == "mm" and cloud.dropped == 0 and cloud.path == str(path)
+    assert cloud.file_units == "mm" and cloud.dropped == 0 and cloud.path == str(path)
     np.testing.assert_allclose(cloud.points, POINTS, atol=1e-9)
 
 
@@ -50,10 +50,10 @@ def test_pcd_binary_with_extra_fields(tmp_path):
 
 
 def test_write_pcd_round_trip(tmp_path):
-    for binary in (True, False):
-        path = write_pcd(tmp_path / f"w{binary}.pcd", POINTS, "mm", binary=binary)
+    for data in ("binary_compressed", "binary", "ascii"):
+        path = write_pcd(tmp_path / f"w{data}.pcd", POINTS, "mm", data=data)
         cloud = read_cloud(path)
-        assert cloud.units == "mm"
+        assert cloud.file_units == "mm"
         np.testing.assert_allclose(cloud.points, POINTS, atol=1e-6)
 
 
@@ -70,7 +70,7 @@ def test_ply_ascii_with_faces(tmp_path):
     header = ply_header("ascii", len(POINTS),
                         "element face 2\nproperty list uchar int vertex_indices\n")
     cloud = read_cloud(write(tmp_path, "a.ply", header + (rows + faces).encode()))
-    assert cloud.units == "m"
+    assert cloud.file_units == "m"
     np.testing.assert_allclose(cloud.points, POINTS, atol=1e-6)
 
 
@@ -158,27 +158,27 @@ PNG = b"\x89PNG\r\n\x1a\n" + bytes(100)
     ("p.npy", PNG, r"p\.npy: expected a NumPy \.npy file"),
     ("p.csv", PNG, r"p\.csv: expected a text file of x y z rows, found binary data"),
     ("c.pcd", pcd_header(3, "binary_compressed") + bytes(20),
-     r"c\.pcd: DATA: expected ascii or binary .*found binary_compressed"),
+     r"c\.pcd: DATA binary_compressed: expected an uncompressed size of 36 bytes .*found 0"),
     ("t.pcd", pcd_header(100, "binary") + bytes(40),
-     r"t\.pcd: DATA: expected 100 points of 12 bytes \(1200 bytes\), found 40 bytes"),
+     r"t\.pcd: DATA binary: expected 100 points of 12 bytes \(1,200 bytes\), found 40 bytes"),
     ("f.pcd", pcd_header(1, "ascii", "x y intensity") + b"1 2 3\n",
-     r"f\.pcd: FIELDS: expected fields x, y and z, found x y intensity"),
+     r"f\.pcd: FIELDS: expected fields x, y and z, found 'x y intensity'"),
     ("s.pcd", pcd_header(1, "ascii", size="4 4") + b"1 2 3\n",
      r"s\.pcd: SIZE: expected 3 entries, one per field, found 2"),
     ("n.pcd", pcd_header(3, "ascii") + b"1000 0 0\n1000 1 1\n1000 2\n",
-     r"n\.pcd: line 15: expected 3 values, found 2"),
+     r"n\.pcd: line 15: expected 3 values \(FIELDS, COUNT\), found 2"),
     ("l.pcd", pcd_header(3, "ascii") + b"1000 0 0\n1000 1 1\n",
      r"l\.pcd: POINTS: expected 3 data lines, found 2"),
     ("w.csv", "# units: m\nx,y,z\n1,2,3\n1,two,3\n", r"w\.csv: line 4: expected numbers, "
-                                                    r"found 'two'"),
+                                                    r"found '1 two 3'"),
     ("h.csv", "# units: m\na,b,c\n1,2,3\n", r"h\.csv: line 2: expected a header naming "
-                                            r"columns x, y and z, found a,b,c"),
+                                            r"columns x, y and z, found 'a,b,c'"),
     ("k.csv", "# units: m\n1,2\n3,4\n", r"k\.csv: line 2: expected at least 3 values per line"),
     ("v.ply", b"ply\nformat ascii 1.0\ncomment units m\nelement face 1\nproperty list uchar "
               b"int i\nend_header\n3 0 1 2\n",
      r"v\.ply: element vertex: expected a vertex element, found none"),
     ("b.ply", ply_header("binary_little_endian", 10) + bytes(13),
-     r"b\.ply: element vertex: expected 10 vertices of 13 bytes \(130 bytes\), found 13 bytes"),
+     r"b\.ply: element vertex: expected 10 items of 13 bytes \(130 bytes\), found 13 bytes"),
     ("f.ply", ply_header("binary_middle_endian", 1), r"f\.ply: format: expected ascii, "
                                                      r"binary_little_endian or binary_big_endian"),
     ("u.pcd", pcd_header(1, "ascii").replace(b"# units: mm\n", b"# units: mm\n# units: m\n")
@@ -200,6 +200,6 @@ def test_pickled_npy_missing_file_and_wrong_shape(tmp_path):
     with pytest.raises(ModelFileError, match=r"missing\.pcd: expected a readable file"):
         read_cloud(tmp_path / "missing.pcd", "m")
     np.save(tmp_path / "w.npy", np.zeros((10, 2)))
-    with pytest.raises(ModelFileError, match=r"w\.npy: array: expected numbers of shape "
+    with pytest.raises(ModelFileError, match=r"w\.npy: array: expected real numbers of shape "
                                              r"\(N, 3\)"):
         read_cloud(tmp_path / "w.npy", "m")

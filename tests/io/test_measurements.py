@@ -64,9 +64,13 @@ def test_pool_ignores_other_columns(tmp_path):
                                                r"column 'w'"),
     ("q1,q2,q3,q4,x,y,z\n1,2,3,4,5,6\n", r"line 2: expected 7 values \(one per column of the "
                                          r"header\), found 6"),
-    ("q1,q2,q3,q4,x,y,z\n1,2,3,4,5,six,7\n", r"line 2, column y: expected a finite number, "
-                                             r"found 'six'"),
-    ("q1,q2,q3,q4,x,y,z\n1,2,3,4,5,nan,7\n", r"line 2, column y: expected a finite number"),
+    ("q1,q2,q3,q4,x,y,z\n1,2,3,4,5,six,7\n", r"line 2, column y: expected a valid number "
+                                             r"from -1e\+09 to 1e\+09, found 'six'"),
+    ("q1,q2,q3,q4,x,y,z\n1,2,3,4,5,nan,7\n", r"line 2, column y: expected a valid number"),
+    ("q1,q2,q3,q4,x,y,z\n1,2,3,4,5,1e308,7\n", r"line 2, column y: expected a number "
+                                               r"from -1e\+09 to 1e\+09, found 1e\+308"),
+    ("# units: mm deg\n# units: m deg\nq1,q2,q3,q4,x,y,z\n1,2,3,4,5,6,7\n",
+     r"line 2: expected one units line, before the header, found another"),
     ("# units: inch\nq1,q2,q3,q4,x,y,z\n1,2,3,4,5,6,7\n", r"line 1: expected units as 'LENGTH "
                                                           r"\[ANGLE\]'.*found 'inch'"),
     ("q1,q1,q3,q4,x,y,z\n1,2,3,4,5,6,7\n", r"line 1: expected distinct column names, found "

@@ -27,10 +27,10 @@ def test_the_three_forms_read_the_same(tmp_path, name, text):
 
 @pytest.mark.parametrize("name, text, words", [
     ("wp.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n1,NaN,0,0,0,0\n",
-     "wp.csv: line 3: expected finite numbers, found 1, NaN, 0, 0, 0, 0 (NaN is not)"),
-    ("wp.csv", "0,0,0,0,0,-inf\n", "wp.csv: line 1: expected finite numbers"),
+     "wp.csv: line 3, column 2: expected a valid number from -1e+09 to 1e+09, found 'NaN'"),
+    ("wp.csv", "0,0,0,0,0,-inf\n", "wp.csv: line 1, column 6: expected a valid number"),
     ("wp.json", '{"q": [[0, 0, 0, 0, 0, 0]], "t": [Infinity]}',
-     "wp.json: t[0]: expected finite numbers, found inf"),
+     "wp.json: t[0]: expected a finite number from -1e+09 to 1e+09, found inf"),
 ])
 def test_nan_and_inf_name_file_and_line(tmp_path, name, text, words):
     path = tmp_path / name

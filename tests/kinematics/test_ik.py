@@ -9,7 +9,7 @@ import itertools
 import numpy as np
 import pytest
 import roboticstoolbox as rtb
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
 import armkit

@@ -104,12 +104,21 @@ def test_choose_rule():
     foot = T[:3, 3] - 0.10 * n + 0.25 * T[:3, 0]
     box = foot + uv[:, :1] * T[:3, 0] + uv[:, 1:] * T[:3, 1] + 0.03 * n
     points = np.concatenate([scene.points, box])
+    # The plate is the largest cluster, but its points fill the circle they fit: not a pipe.
     largest = detect_target(points, radius=None, max_extent=0.1)
-    highest = detect_target(points, radius=None, max_extent=0.1, choose="highest")
-    assert np.linalg.norm(largest.centre - (foot + 0.03 * n)) < 0.03     # the box is largest
-    assert errors(highest, scene)[0] < 1e-3                              # the pipe stands highest
-    nearest = detect_target(points, radius=0.04, choose="nearest")
-    assert nearest.success
+    assert errors(largest, scene)[0] < 1e-3 and largest.runner_up is None
+    plate = [c for c in largest.considered if not c.passed]
+    assert len(plate) == 1 and plate[0].size > largest.cluster_size
+    assert "not a pipe's side" in plate[0].reason
+    # Two pipes: the rule decides, and the result names the rule and the runner-up.
+    second = random_scene(5, noise=0.001, n_points=N, outliers=0.0,
+                          offset=(0.25, -0.1)).points
+    far = second[(second @ n + scene.plane_offset) > 0.004]
+    both = np.concatenate([scene.points, far])
+    for rule in ("largest", "nearest", "highest"):
+        result = detect_target(both, radius=0.04, choose=rule)
+        assert result.success and result.runner_up is not None
+        assert "2 pipes that passed" in result.rule and "runner-up" in result.rule
 
 
 def test_no_target_is_a_result_with_a_reason():
@@ -122,11 +131,11 @@ def test_no_target_is_a_result_with_a_reason():
     # a hole where a pipe was asked for, a pipe where a hole was asked for
     assert not detect_target(random_scene(1, "hole", n_points=N).points).success
     miss = detect_target(random_scene(1, "pipe", n_points=N).points, kind="hole")
-    assert not miss.success and "not an opening" in miss.reason
+    assert not miss.success and miss.reason.startswith("no hole")
     # a pipe much larger than the known radius
     big = random_scene(1, "pipe", n_points=N, radius=0.12)
     result = detect_target(big.points, radius=0.02)
-    assert not result.success and "size" in result.reason
+    assert not result.success and "larger than the inlet" in result.reason
     # no dominant plane at all
     blob = np.random.default_rng(0).normal([1.5, 0, 0], 0.3, (5000, 3))
     result = detect_target(blob)
@@ -163,7 +172,7 @@ def test_from_a_file_with_nan_points(tmp_path):
     path = write_pcd(tmp_path / "scan.pcd", points, "mm")
     result = detect_target(path, radius=0.04)
     assert result.success and result.dropped == len(points[::1000])
-    assert result.units == "mm" and result.source == str(path)
+    assert result.file_units == "mm" and result.source == str(path)
     assert errors(result, scene)[0] < 1e-3
     with pytest.raises(ModelFileError, match="expected finite coordinates"):
         detect_target(str(path), radius=0.04, nonfinite="refuse")
@@ -174,12 +183,16 @@ def test_from_a_file_with_nan_points(tmp_path):
     mine[0] = 0.0                                             # the caller's array stays theirs
 
 
-def test_sparse_rings_need_a_larger_eps_and_say_so():
+def test_sparse_rings_are_bridged_by_the_measured_ring_gap():
     scene = synthetic_scene(noise=0.002, n_points=20_000, rings=24, seed=3)
-    short = detect_target(scene.points, radius=0.04)       # one ring's arc: no silent answer
-    assert not short.success and "too short an arc" in short.reason
-    joined = detect_target(scene.points, radius=0.04, eps=0.04)
+    # The rings lie 17 mm apart on the wall, the points along them 1 mm: the clustering
+    # radius follows the gap, so the pipe is one cluster across its rings.
+    joined = detect_target(scene.points, radius=0.04)
+    assert joined.rows == 24 and joined.eps > 0.02
     assert joined.success and errors(joined, scene)[0] < 1e-3
+    # A radius smaller than the gap leaves each ring's arc a cluster of its own: too few points.
+    short = detect_target(scene.points, radius=0.04, eps=0.005)
+    assert not short.success and "no cluster of at least 30 points" in short.reason
 
 
 def test_known_radius_on_a_short_arc_fits_both_sides():

@@ -16,7 +16,7 @@ def labels(fig):
 def test_found_pipe_in_millimetres(tmp_path):
     scene = random_scene(0, n_points=20_000)
     result = detect_target(scene.points, radius=0.04)
-    object.__setattr__(result, "units", "mm")
+    object.__setattr__(result, "file_units", "mm")
     fig = detection_figure(result)
     assert labels(fig) == [("along the wall, u (mm)", "along the wall, v (mm)"),
                            ("u (mm)", "v (mm)"), ("u (mm)", "height above the wall (mm)")]

@@ -14,9 +14,13 @@ Dornaika (1995) on every pair of poses; ``"pairs"`` refines X over the pairs (Ga
 ``"joint"`` (the default) refines X and W together on the absolute poses, which uses each
 measurement once rather than in every pair it belongs to.
 
-Degenerate data is refused with a reason (``success`` False, X filled with NaN), never answered:
-repeated poses, no rotation change, rotations about one axis (the scaled refinement Jacobian has
-a near-zero singular value), and poses that fit far better inverted (the convention mistake).
+Only two things are refused (``success`` False, X filled with NaN), each saying which:
+degenerate motion (repeated poses, no rotation change, rotations about one axis: the scaled
+refinement Jacobian has a near-zero singular value), and poses that fit far better inverted
+(the convention mistake: `CONVENTION_RATIO` times or more, for the robot poses, the camera
+poses or both). Noisy data is answered: with its residuals per pose pair, X's covariance, and a
+warning when the residuals exceed what a calibrated camera gives (`WARN_ROTATION`,
+`WARN_TRANSLATION`), so that a user sees how far to trust X.
 """
 
 from __future__ import annotations
@@ -45,7 +49,11 @@ MIN_SCALED_SINGULAR_VALUE = 0.02
 # The poses fit this many times better (rotation residual) with the robot poses inverted:
 # the base-to-gripper / gripper-to-base mistake gives 20-100x, noise alone about 1x.
 CONVENTION_RATIO = 5.0
-MAX_ROTATION_RESIDUAL = np.deg2rad(5.0)  # rms over the poses: no camera is this bad
+# Residuals (rms over the pose pairs) above which the answer carries a warning: a calibrated
+# camera seeing a printed target gives a few tenths of a degree and a few millimetres; fiducial
+# tags seen from afar give degrees and centimetres.
+WARN_ROTATION = np.deg2rad(0.5)
+WARN_TRANSLATION = 0.005      # m
 
 _E = skew(np.eye(3))          # (3, 3, 3): _E[k] = [e_k]x
 
@@ -72,6 +80,9 @@ class HandEyeResult:
     scaled_singular_value : float
         Smallest singular value of the column-normalised refinement Jacobian (near 0: X is not
         determined by the data).
+    warning : str
+        "" or, for residuals above `WARN_ROTATION` or `WARN_TRANSLATION`, what they are and
+        how far they leave X uncertain.
     """
 
     success: bool
@@ -84,6 +95,7 @@ class HandEyeResult:
     translation_residuals: NDArray
     covariance: NDArray
     scaled_singular_value: float
+    warning: str = ""
 
     @property
     def rotation_std(self) -> NDArray:
@@ -405,11 +417,10 @@ def _convention(G: NDArray, C: NDArray) -> str | None:
     # motions are then conjugate through W instead of X): name every one that fits as well.
     what = " or ".join(w for w, fit_ in sorted(alternatives.items(), key=lambda item: item[1])
                        if fit_ <= 2 * best + 1e-12)
-    if given > MAX_ROTATION_RESIDUAL or (given > 1e-9 and given > CONVENTION_RATIO * best):
-        hint = (f"; they fit {given / max(best, 1e-300):.3g}x better with {what}"
-                if given > CONVENTION_RATIO * best else "")
-        return (f"the poses do not fit one X: rotation residuals of {np.rad2deg(given):.3g} deg "
-                f"rms{hint}; check the pose convention")
+    if given > 1e-9 and given > CONVENTION_RATIO * best:
+        return (f"the poses as given fit {given / max(best, 1e-300):.3g}x worse than with "
+                f"{what} (rotation residuals of {np.rad2deg(given):.3g} deg rms against "
+                f"{np.rad2deg(best):.3g}); check the pose convention")
     return None
 
 
@@ -510,6 +521,16 @@ def handeye(robot_poses: ArrayLike, camera_poses: ArrayLike, mode: Mode = "eye_i
     # Residuals in rad (translations times weight, 1/m), parameters in rad and m: the
     # covariance comes out in rad^2 and m^2.
     cov = sigma2 * np.linalg.pinv(J.T @ J)[:6, :6]
+    rot_rms = float(np.sqrt(np.mean(residuals[0] ** 2)))
+    trans_rms = float(np.sqrt(np.mean(residuals[1] ** 2)))
+    warning = ""
+    if rot_rms > WARN_ROTATION or trans_rms > WARN_TRANSLATION:
+        std = np.sqrt(np.diag(cov))
+        warning = (f"noisy data: residuals of {np.rad2deg(rot_rms):.3g} deg and "
+                   f"{trans_rms * 1e3:.3g} mm rms per pose pair (a calibrated camera gives under "
+                   f"{np.rad2deg(WARN_ROTATION):.2g} deg and {WARN_TRANSLATION * 1e3:.2g} mm); X "
+                   f"is uncertain by {np.rad2deg(np.linalg.norm(std[:3])):.3g} deg and "
+                   f"{np.linalg.norm(std[3:]) * 1e3:.3g} mm (one standard deviation)")
     return HandEyeResult(True, "ok", X, W, method, mode, residuals[0], residuals[1], cov,
-                         smallest)
+                         smallest, warning)
 

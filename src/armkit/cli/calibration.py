@@ -13,6 +13,7 @@ import armkit
 from armkit.calibration.handeye import METHODS, handeye
 from armkit.cli.command import EXIT_FAILED, JsonFlag, app, print_json, stdout
 from armkit.cli.robots import RobotArg
+from armkit.cli.values import COORDINATE, FIGURE_FORMATS, number, output_path, shown
 from armkit.errors import InputError
 from armkit.io.handeye import pose_document, read_handeye_poses, write_handeye_result
 from armkit.io.measurements import read_accuracy, read_measurements, read_pool
@@ -20,17 +21,7 @@ from armkit.io.robot_files import save_robot
 from armkit.model import Units
 
 
-def _writable(path: Path | None, name: str = "--out") -> Path | None:
-    """`path` if its folder exists and is writable, checked before any work."""
-    if path is None:
-        return None
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise InputError(f"{name}: expected a file in an existing folder, found {path} "
-                         f"(no folder {folder})")
-    if path.is_dir():
-        raise InputError(f"{name}: expected a file name, found the folder {path}")
-    return path
+YAML = (".yaml", ".yml")
 
 
 def _stats(d: np.ndarray, length) -> dict:
@@ -53,15 +44,18 @@ def handeye_command(
     """Hand-eye calibration (AX = XB): the camera's mount from pose pairs; exit 1 with the
     reason when the poses cannot determine it."""
     if method not in METHODS:
-        raise InputError(f"--method: expected one of {', '.join(METHODS)}, found {method!r}")
-    out = _writable(out)
+        raise InputError(f"--method: expected one of {', '.join(METHODS)}, found "
+                         f"{shown(method)}")
+    if out is not None:
+        out = output_path(out, folder=False, formats=YAML)
     data = read_handeye_poses(poses)
     result = handeye(data.robot_poses, data.camera_poses, data.mode, method)
     u = data.units
     deg, length = u.angle_from_si, u.length_from_si
     doc = {"file": str(poses), "units": {"length": u.length, "angle": u.angle},
            "mode": result.mode, "method": result.method, "success": result.success,
-           "reason": result.reason, "poses": len(data.robot_poses)}
+           "reason": result.reason, "warning": result.warning,
+           "poses": len(data.robot_poses)}
     if result.success:
         frames = ("T_gripper_camera", "T_base_target") if result.mode == "eye_in_hand" else (
             "T_base_camera", "T_gripper_target")
@@ -105,6 +99,8 @@ def _show_handeye(doc: dict) -> None:
                  f"{max(r['rotation']):.3g}; translation rms {r['translation_rms']:.3g} {L}, "
                  f"max {max(r['translation']):.3g}")
     stdout.print(f"smallest scaled singular value {doc['scaled_singular_value']:.3g}")
+    if doc["warning"]:
+        stdout.print(f"warning: {doc['warning']}")
     if "out" in doc:
         stdout.print(f"result written to {doc['out']}")
 
@@ -138,7 +134,9 @@ def calibrate_command(
     from armkit.calibration.identify import calibrate, select_poses
 
     model = armkit.robot(robot)
-    out = _writable(out)
+    if out is not None:
+        out = output_path(out, folder=False, formats=YAML,
+                          files=(Path(out).with_suffix(".png").name,))
     if pool is not None and select is None:
         raise InputError("--pool: expected with --select N (the number to choose), found "
                          "no --select")
@@ -248,18 +246,17 @@ def accuracy_command(
     file: Annotated[Path, typer.Argument(help="Accuracy experiment (CSV): commanded and "
                                               "measured positions.")],
     tolerance: Annotated[Optional[float], typer.Option(
-        help="Limit on every point's error, file units; exit 1 if a point exceeds it.")] = None,
+        help="Limit on every point's error, file units; exit 1 if a point exceeds it.",
+        parser=number(0.0, COORDINATE, low_open=True))] = None,
     out: Annotated[Optional[Path], typer.Option(help="Write the figure (PNG) here.")] = None,
     as_json: JsonFlag = False) -> None:
     """Commanded against measured positions: error per point, mean, max, rms, bias per axis."""
     from armkit.calibration.accuracy import accuracy_report
 
-    out = _writable(out)
+    if out is not None:
+        out = output_path(out, folder=False, formats=FIGURE_FORMATS)
     data = read_accuracy(file)
     u = data.units
-    if tolerance is not None and not (np.isfinite(tolerance) and tolerance > 0):
-        raise InputError(f"--tolerance: expected a positive length in {u.length}, found "
-                         f"{tolerance:g}")
     report = accuracy_report(data.commanded, data.measured,
                       None if tolerance is None else float(u.length_to_si(tolerance)))
     def length(x):          # file units, without the last-bit noise of the mm <-> m round trip

@@ -20,8 +20,8 @@ import typer
 from rich.console import Console
 from typer.core import TyperGroup
 
-from armkit.cli.values import label
-from armkit.errors import ArmkitError, DriveError, InputError
+from armkit.cli.values import label, output_path
+from armkit.errors import ArmkitError, DriveError, InputError, cut
 from armkit.io.documents import is_number
 
 EXIT_FAILED, EXIT_BAD_INPUT = 1, 2
@@ -31,8 +31,11 @@ DESCRIPTION = ("Serial robot arms: robot models (DH, modified DH, screws, URDF),
                "planning, hand-eye and kinematic calibration, targets in point clouds, joint "
                "waypoints to Modbus TCP drives, and the end-to-end job with its report.")
 
-stdout = Console(highlight=False, soft_wrap=True)
-stderr = Console(stderr=True, highlight=False, soft_wrap=True)
+# Text from files and users (robot and joint names, file names, reasons) reaches the console as
+# it is: no console markup ("[bold]" stays text; a stray "[/]" cannot raise) and no emoji codes
+# (":x:" stays text). A command that styles its own words does so with rich.text.Text.
+stdout = Console(highlight=False, soft_wrap=True, markup=False, emoji=False)
+stderr = Console(stderr=True, highlight=False, soft_wrap=True, markup=False, emoji=False)
 
 
 # Typer's usage errors (its own copy of click's): the classes come from typer's public one.
@@ -118,9 +121,16 @@ def usage_line(err) -> str:
     return f"{command}: {err.message}"
 
 
+LONGEST_MESSAGE = 1000
+"""Characters of an error line at most: values are cut where messages are made (300
+characters for a file's error); this bounds what no message should reach (a list of options)."""
+
+
 def one_line(text: str) -> str:
-    """A message on one line, however it came."""
-    return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
+    """A message on one line, however it came, short enough that ``armkit: `` and it make at
+    most `LONGEST_MESSAGE` characters."""
+    line = " ".join(part.strip() for part in str(text)[:100_000].splitlines() if part.strip())
+    return cut(line, LONGEST_MESSAGE - len("armkit: "))
 
 
 class _Group(TyperGroup):
@@ -203,20 +213,16 @@ def print_json(document: Any) -> None:
     sys.stdout.write(json.dumps(_plain(document), allow_nan=False) + "\n")
 
 
-def output_folder(path: Path, name: str = "--out") -> Path:
-    """The folder figures go to, made if missing, before any work is done.
+def output_folder(path: Path, name: str = "--out", files: tuple[str, ...] = ()) -> Path:
+    """The folder figures go to, made if missing, and the `files` a command will write in it,
+    checked writable before any work is done (`armkit.cli.values.output_path`).
 
     Raises
     ------
     InputError
-        ``--out: expected a folder armkit can write, found ...``.
+        ``--out: expected a folder armkit can write in, found 'out' (Read-only file system)``.
     """
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise InputError(f"{name}: expected a folder armkit can write, found {path} "
-                         f"({err.strerror or err})") from None
-    return path
+    return output_path(path, name, folder=True, files=files)
 
 
 def load_commands(modules: tuple[str, ...] = MODULES) -> None:

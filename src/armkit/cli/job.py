@@ -18,7 +18,7 @@ from rich.text import Text
 from armkit.cli.command import (EXIT_FAILED, NUMBERS, JsonFlag, app, print_json, stderr,
                                 stdout)
 from armkit.cli.robots import RobotArg
-from armkit.cli.values import load_robot, number
+from armkit.cli.values import load_robot, number, output_path
 from armkit.errors import InputError
 
 # The job, its report and the views import numba, scipy, matplotlib and plotly: each command
@@ -130,10 +130,7 @@ def view(robot: RobotArg,
     model = load_robot(robot) if tip is None else load_urdf(robot, tip)
     if q and len(q) != model.n:
         raise InputError(f"Q: expected {model.n} joint values for {model.name}, found {len(q)}")
-    if out.suffix.lower() not in (".html", ".htm"):
-        raise InputError(f"--out: expected an .html file, found {out}")
-    if out.exists() and not out.is_file():
-        raise InputError(f"--out: expected a file armkit can write, found {out} (a directory)")
+    output_path(out, "--out", folder=False, formats=(".html", ".htm"))
     q_si = model.q_to_si(q) if q else np.clip(0.0, model.lower, model.upper)
     outside = (q_si < model.lower - 1e-12) | (q_si > model.upper + 1e-12)
     if outside.any():

@@ -9,8 +9,12 @@ import typer
 from rich.table import Table
 
 from armkit.cli.command import EXIT_FAILED, JsonFlag, SiFlag, app, output_folder, print_json, stdout
+from armkit.cli.values import number, shown
+from armkit.io.documents import SEED
 from armkit.errors import InputError
 from armkit.model import SI
+
+MAX_WAYPOINTS = 100_000         # as planning files allow (armkit.io.scene)
 
 
 @app.command(name="plan")
@@ -19,7 +23,8 @@ def plan_command(
                                               "goal or goal_pose, planner settings.")],
     planner: Annotated[str | None, typer.Option(
         help="One of rrtconnect, rrt, rrtstar (default: the file's, else rrtconnect).")] = None,
-    seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).")] = None,
+    seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).",
+                                             parser=number(*SEED, integer=True))] = None,
     time_limit: Annotated[float | None, typer.Option(
         "--time-limit", help="Seconds for the whole search (default: the file's, else 10).")
     ] = None,
@@ -33,15 +38,17 @@ def plan_command(
     from armkit.planning import PLANNERS, CollisionChecker, PlanSettings, arm_geometry, plan
 
     if planner is not None and planner not in PLANNERS:
-        raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found {planner!r}")
+        raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found "
+                         f"{shown(planner)}")
     if time_limit is not None and not time_limit >= 0:
         raise InputError(f"--time-limit: expected seconds >= 0, found {time_limit:g}")
-    if waypoints is not None and waypoints < 2:
-        raise InputError(f"--waypoints: expected a whole number >= 2, found {waypoints}")
-    if out is not None:
-        out = output_folder(out)
+    if waypoints is not None and not 2 <= waypoints <= MAX_WAYPOINTS:
+        raise InputError(f"--waypoints: expected a whole number from 2 to {MAX_WAYPOINTS}, "
+                         f"found {waypoints}")
     problem = read_planning_problem(file)
     robot, units = problem.robot, (SI if si else problem.units)
+    if out is not None:
+        out = output_folder(out, files=(f"{robot.name}_path.png",))
     settings = dict(problem.settings)
     for key, value in (("planner", planner), ("seed", seed), ("waypoints", waypoints),
                        ("time_limit", time_limit)):

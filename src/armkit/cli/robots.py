@@ -8,6 +8,7 @@ from typing import Annotated
 import numpy as np
 import typer
 from rich.table import Table
+from rich.text import Text
 
 import armkit
 from armkit.cli.command import NUMBERS, JsonFlag, SiFlag, app, print_json, stdout
@@ -97,9 +98,10 @@ def show(robot: RobotArg, as_json: JsonFlag = False, si: SiFlag = False) -> None
                                               for row in frame_rows],
                            "collision": collision})
     mimics = model.chain.n_joints + len(model.chain.leaders) - model.n
-    stdout.print(f"[bold]{model.name}[/bold]  {model.n} joints {_kinds(model)}"
-                 + (f" (and {mimics} mimic joint{'s' * (mimics > 1)})" if mimics else "")
-                 + f", file units {model.units.length}/{model.units.angle}")
+    stdout.print(Text.assemble(
+        (model.name, "bold"), f"  {model.n} joints {_kinds(model)}"
+        + (f" (and {mimics} mimic joint{'s' * (mimics > 1)})" if mimics else "")
+        + f", file units {model.units.length}/{model.units.angle}"))
     if model.description:
         stdout.print(model.description)
     columns = list(dict.fromkeys(key for row in joints for key in row))

@@ -98,13 +98,13 @@ def traj(
                  "acceleration": _numbers("acceleration", acceleration, *LIMIT),
                  "jerk": _numbers("jerk", jerk, *LIMIT)}
     robot_text("case", case)
-    out = output_folder(out)
     spec = read_case(case, overrides)
     robot = spec.robot
+    stem = Path(case).stem if spec.source else f"{robot.name}_traj"
+    out = output_folder(out, files=(f"{stem}_joints.png", f"{stem}_tool.png"))
     table = tj.compare(spec.trajectories)
     excesses = limit_excesses(spec)
     units = SI if si else robot.units
-    stem = Path(case).stem if spec.source else f"{robot.name}_traj"
     figures = _figures(spec, out, stem)
     results = [{"label": label, "duration": s.duration, "knots": spec.trajectories[label].knots,
                 "joints": _rows(robot, spec.trajectories[label], s, spec.moving, units)}

@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.text import Text
 
 import armkit
 from armkit.cli.command import JsonFlag, SiFlag, app, output_folder, print_json, stderr, stdout
@@ -96,7 +97,7 @@ def workspace(robot: RobotArg,
     units = SI if si else model.units
     samples = (_count(n, MOST_SAMPLES, "in this process (--scheduler for more)")
                if scheduler is None else _count(n, MOST_SAMPLES_DASK, "on Dask"))
-    out = output_folder(out)
+    out = output_folder(out, files=(f"{model.name}_workspace.png", f"{model.name}_sections.png"))
     kwargs = dict(seed=seed, scheduler=scheduler)
     if resolution is not None:
         kwargs["resolution"] = float(model.units.length_to_si(resolution))
@@ -132,8 +133,8 @@ def workspace(robot: RobotArg,
             "volume_history": [[int(m), volume(v)] for m, v in ws.volume_history],
             "sections": sections, "figures": [str(p) for p in figures]})
     u = units.length
-    stdout.print(f"[bold]{model.name}[/bold]: {ws.samples:,} samples, seed {ws.seed}, "
-                 f"voxels of {length(ws.resolution):g} {u}")
+    stdout.print(Text.assemble((model.name, "bold"), f": {ws.samples:,} samples, seed "
+                               f"{ws.seed}, voxels of {length(ws.resolution):g} {u}"))
     stdout.print(f"bounds ({u}):  " + "   ".join(
         f"{axis} {lo:.6g} .. {hi:.6g}"
         for axis, lo, hi in zip("xyz", length(ws.lower), length(ws.upper))))

@@ -20,11 +20,11 @@ from pydantic import Field, field_validator
 
 from armkit.calibration.frames import CameraMount
 from armkit.errors import ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
+from armkit.io.documents import Value, StrictModel, UnitsField, read_yaml, validated
 from armkit.io.handeye import PoseField, rigid_pose
 from armkit.model.robot import Units
 
-Row6 = Annotated[list[float], Field(min_length=6, max_length=6)]
+Row6 = Annotated[list[Value], Field(min_length=6, max_length=6)]
 
 
 class CameraToBaseFile(StrictModel):
@@ -33,13 +33,13 @@ class CameraToBaseFile(StrictModel):
 
 
 class StdField(StrictModel):
-    rotation: Annotated[list[float], Field(min_length=3, max_length=3)]
-    translation: Annotated[list[float], Field(min_length=3, max_length=3)]
+    rotation: Annotated[list[Value], Field(min_length=3, max_length=3)]
+    translation: Annotated[list[Value], Field(min_length=3, max_length=3)]
 
 
 class ResidualsField(StrictModel):
-    rotation: float
-    translation: float
+    rotation: Value
+    translation: Value
 
 
 class HandEyeField(StrictModel):

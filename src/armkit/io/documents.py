@@ -27,21 +27,112 @@ class StrictModel(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
-def _strict_number(value: Any) -> float:
-    """A finite int or float as a float; a bool, a string or anything else is refused."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"expected a valid number, found {found_text(value)}")
+LARGEST = 1e9
+"""The largest magnitude of a number in any file, in the file's own units (1e9 mm is 1000 km;
+squares and sums of such numbers stay far from overflow). The command line's rule too."""
+
+_DECIMAL = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?")
+_INTEGER = re.compile(r"[-+]?[0-9]+")
+
+
+def _span(low: float, high: float, low_open: bool) -> str:
+    if not (math.isfinite(low) or math.isfinite(high)):
+        return ""
+    return (f" above {low:g} and at most {high:g}" if low_open else f" from {low:g} to {high:g}")
+
+
+def check_number(value: Any, low: float = -LARGEST, high: float = LARGEST, *,
+                 low_open: bool = False, integer: bool = False) -> float | int:
+    """The one rule for a number read from a file (YAML value, CSV cell, header word).
+
+    A number is an int or a float (a bool is not), or, in a text format, a plain ASCII decimal
+    (``-1.5``, ``2e-3``; not ``0x10``, ``4_00``, ``nan``, ``inf``, ``²`` or ``"1.5"`` quoted in
+    YAML); it is finite and within ``[low, high]`` (``(low, high]`` with `low_open`), at most
+    `LARGEST` in magnitude unless the field states a range of its own; an integer field takes
+    whole numbers only (not 3.0).
+
+    Parameters
+    ----------
+    value : int, float or str
+        A str only from a text format's cell (a YAML string is refused by `Number`).
+
+    Returns
+    -------
+    float, or int when `integer`
+
+    Raises
+    ------
+    ValueError
+        ``expected a number from -1e+09 to 1e+09, found 1e+308``, the message that
+        `validation_error` and `number_from_text` turn into a ModelFileError.
+    """
+    what = "a whole number" if integer else "a valid number"
+    span = _span(low, high, low_open)
+    if isinstance(value, str):
+        text = value.strip()
+        if not (_INTEGER if integer else _DECIMAL).fullmatch(text) or len(text) > 400:
+            raise ValueError(f"expected {what}{span}, found {found_text(value)}")
+        value = int(text) if integer else float(text)
+    elif isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"expected {what}{span}, found {found_text(value)}")
+    if integer and isinstance(value, float):
+        raise ValueError(f"expected {what}{span}, found {found_text(value)}")
     try:
         number = float(value)
     except OverflowError:                     # an int beyond the largest double
         number = math.inf
     if not math.isfinite(number):
-        raise ValueError(f"expected a finite number, found {found_text(value)}")
-    return number
+        raise ValueError(f"expected a finite number{span}, found {found_text(value)}")
+    if number < low or number > high or (low_open and number == low):
+        raise ValueError(f"expected {what.replace('a valid', 'a')}{span}, found {number:g}")
+    return int(value) if integer else number
 
 
-Number = Annotated[float, BeforeValidator(_strict_number)]
-"""A file's number field: a finite int or float (``true`` or ``"1.5"`` is not a number)."""
+def number_from_text(text: str, path: str, field: str, low: float = -LARGEST,
+                     high: float = LARGEST, **kwargs) -> float | int:
+    """`check_number` for a word of a text file; a bad one is a ModelFileError naming `field`."""
+    try:
+        return check_number(text, low, high, **kwargs)
+    except ValueError as err:
+        expected, _, found = str(err).removeprefix("expected ").partition(", found ")
+        raise ModelFileError(path, field, expected, found) from None
+
+
+def bounded(low: float = -LARGEST, high: float = LARGEST, *, low_open: bool = False,
+            integer: bool = False) -> Any:
+    """A pydantic field type for a file's number within a stated range (see `check_number`)."""
+    def check(value: Any) -> float | int:
+        if isinstance(value, str):            # a quoted "1.5" in YAML is text, not a number
+            what = "a whole number" if integer else "a valid number"
+            raise ValueError(f"expected {what}{_span(low, high, low_open)}, found "
+                             f"{found_text(value)}")
+        return check_number(value, low, high, low_open=low_open, integer=integer)
+
+    return Annotated[int if integer else float, BeforeValidator(check)]
+
+
+Number = bounded(-math.inf, math.inf)
+"""A file's number field: a finite int or float (``true`` or ``"1.5"`` is not a number); the
+robot loader states each field's range after converting it to SI."""
+
+Value = bounded()
+"""A file's number field in the file's units: a finite int or float of magnitude at most
+`LARGEST` (``true``, ``"1.5"`` and ``1e308`` are not)."""
+
+Positive = bounded(0.0, LARGEST, low_open=True)
+"""A length, radius or time that must be above zero (file units)."""
+
+Fraction = bounded(0.0, 1.0)
+"""A number from 0 to 1."""
+
+
+SEED = (0, 2**32 - 1)
+"""A random seed's range, in files and on the command line (32 bits, as most tools take)."""
+
+
+def whole(low: int, high: int) -> Any:
+    """A whole-number field from `low` to `high` (``true``, ``1.0`` and ``"3"`` are not)."""
+    return bounded(low, high, integer=True)
 
 
 def is_number(text: str) -> bool:
@@ -102,30 +193,100 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-# YAML 1.1 (PyYAML) reads 1e-3 as a string, as it wants a dot in a float; YAML 1.2 and every
-# user reads it as a number, and so does armkit.
+# Numbers as YAML 1.2 reads them, not YAML 1.1 (PyYAML's): 1.1 reads 1e-3 as a string (it
+# wants a dot in a float), and 4_00 as 400, 1:30 as 90 (base 60), 0b11 as 3 and 017 as 15; a
+# user who types 1:30 or 017 means neither. Under 1.2 those are strings, which a number field
+# refuses by name. Decimal, 0x and 0o integers, and floats with or without a dot, are numbers.
+_UniqueKeyLoader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers
+            if tag not in ("tag:yaml.org,2002:int", "tag:yaml.org,2002:float")]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()}
+_UniqueKeyLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:int", re.compile(r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$"),
+    list("-+0123456789"))
 _UniqueKeyLoader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$"),
+    re.compile(r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?"
+               r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"),
     list("-+.0123456789"))
+
+
+def _construct_int(loader, node):
+    # PyYAML's int constructor reads 0o17 as 0o17's digits in base 8 only without the "o".
+    text = loader.construct_scalar(node)
+    sign = -1 if text.startswith("-") else 1
+    text = text.lstrip("+-")
+    base = 16 if text.startswith("0x") else 8 if text.startswith("0o") else 10
+    return sign * int(text[2:] if base != 10 else text, base)
+
+
+_UniqueKeyLoader.add_constructor("tag:yaml.org,2002:int", _construct_int)
+
+
+LONGEST_NAME = 255
+"""Characters of one file name (NAME_MAX on Linux, macOS, NTFS)."""
+
+LONGEST_PATH = 4096
+"""Characters of a whole path (PATH_MAX on Linux)."""
+
+
+def checked_path(text: str | Path, source: str = "", field: str = "",
+                 folder: str | Path | None = None) -> Path:
+    """The one path rule: a path a file names (or a user types), checked before it is used.
+
+    No NUL character, no name longer than `LONGEST_NAME` characters, at most `LONGEST_PATH`
+    in all; a relative path is taken from `folder` (for a file that names another file: the
+    naming file's own folder, so that a task or scene moves with the files beside it) or
+    else from the working directory. Whether it is a regular file is checked where it is read
+    (`read_bytes`).
+
+    Parameters
+    ----------
+    text : str or Path
+    source, field : str
+        The file that names the path and its field; empty for a path given directly (the
+        message then names the path itself).
+    folder : str or Path, optional
+
+    Raises
+    ------
+    ModelFileError
+    """
+    value = str(text)
+    where, what = (source, field) if source else (_cut(value, 80), "")
+    longest = max((len(part) for part in re.split(r"[/\\]", value)), default=0)
+    problem = ("a NUL character" if "\0" in value else
+               "an empty name" if not value.strip() else
+               f"a name of {longest} characters (at most {LONGEST_NAME})"
+               if longest > LONGEST_NAME else
+               f"a path of {len(value)} characters (at most {LONGEST_PATH})"
+               if len(value) > LONGEST_PATH else None)
+    if problem:
+        raise ModelFileError(where, what, "a file name", problem)
+    path = Path(value)
+    if folder is not None and not path.is_absolute():
+        path = Path(folder) / path
+    return path
 
 
 def read_bytes(path: str | Path, max_bytes: int = MAX_BYTES) -> bytes:
     """A regular file's bytes, at most `max_bytes`; anything else is a ModelFileError.
 
-    A device or a pipe (``/dev/zero``, a FIFO) is refused before it is opened, and a file is
-    never read past its bound, so no file can make this hang or fill the memory.
+    The path is checked by `checked_path`; a directory, device or pipe (``/dev/zero``, a FIFO,
+    a link to one) is refused before it is opened, and a file is never read past its bound, so
+    no file can make this hang or fill the memory.
     """
-    path = Path(path)
+    path = checked_path(path)
+    name = str(path)
     try:
         if path.exists() and not path.is_file():
-            raise ModelFileError(str(path), "", "a regular file", "a directory, device or pipe")
+            raise ModelFileError(name, "", "a regular file", "a directory, device or pipe")
         with path.open("rb") as stream:
             data = stream.read(max_bytes + 1)
     except OSError as err:
-        raise ModelFileError(str(path), "", "a readable file", err.strerror or str(err)) from None
+        raise ModelFileError(name, "", "a readable file", err.strerror or str(err)) from None
     if len(data) > max_bytes:
-        raise ModelFileError(str(path), "", f"a file of at most {max_bytes} bytes",
+        raise ModelFileError(name, "", f"a file of at most {max_bytes} bytes",
                              "a larger one")
     return data
 
@@ -196,7 +357,7 @@ def _bounded_repr(value: Any, budget: int, depth: int = 0) -> str:
     Containers show their first items until the budget is spent; a long string or number is
     cut before it is rendered (an int of a million digits is never converted in full).
     """
-    if isinstance(value, str):
+    if isinstance(value, (str, bytes)):
         return repr(value[:budget + 1])
     if isinstance(value, bool) or value is None or isinstance(value, float):
         return repr(value)

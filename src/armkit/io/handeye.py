@@ -43,14 +43,15 @@ from pydantic import Field, model_validator
 
 from armkit.calibration.handeye import HandEyeResult
 from armkit.errors import InputError, ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
+from armkit.io.documents import StrictModel, UnitsField, Value, read_yaml, validated
 from armkit.kinematics.forward import fk
 from armkit.io.robot_files import robot_named_in
 from armkit.model.robot import Units
 from armkit.spatial import invert, matrix_to_rpy, quat_to_matrix, rpy_to_matrix
 
-Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-Row4 = Annotated[list[float], Field(min_length=4, max_length=4)]
+Vector3 = Annotated[list[Value], Field(min_length=3, max_length=3)]
+Row4 = Annotated[list[Value], Field(min_length=4, max_length=4)]
+MAX_POSES = 100_000             # pose pairs in one file
 
 
 class PoseField(StrictModel):
@@ -108,7 +109,7 @@ class ConventionField(StrictModel):
 
 class PosePairField(StrictModel):
     gripper: PoseField | None = None
-    q: list[float] | None = None
+    q: list[Value] | None = None
     camera: PoseField
 
     @model_validator(mode="after")
@@ -124,7 +125,7 @@ class PosesFile(StrictModel):
     mode: Literal["eye_in_hand", "eye_to_hand"]
     robot: str | None = None
     convention: ConventionField = ConventionField()
-    poses: list[PosePairField] = Field(min_length=1)
+    poses: list[PosePairField] = Field(min_length=1, max_length=MAX_POSES)
 
 
 @dataclass(frozen=True)

@@ -23,14 +23,13 @@ Accuracy experiments: commanded then measured positions; the units line is requi
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from armkit.errors import ModelFileError
-from armkit.io.documents import read_text
+from armkit.io.documents import number_from_text, read_text
 from armkit.model.robot import Robot, Units
 from armkit.spatial import rpy_to_matrix
 
@@ -74,6 +73,10 @@ def read_table(path: str | Path) -> Table:
         if stripped.startswith("#"):
             body = stripped.lstrip("#").strip()
             if body.lower().startswith("units:"):
+                if units != (None, None) or header is not None:
+                    raise ModelFileError(path, f"line {number}", "one units line, before the "
+                                         "header", "another" if header is None
+                                         else "one after the header")
                 units = _units(body.split(":", 1)[1].split(), path, number)
             continue
         cells = [c.strip() for c in next(csv.reader([stripped]))]
@@ -87,17 +90,8 @@ def read_table(path: str | Path) -> Table:
         if len(cells) != len(header):
             raise ModelFileError(path, f"line {number}", f"{len(header)} values (one per "
                                  f"column of the header)", f"{len(cells)}")
-        row = []
-        for name, cell in zip(header, cells):
-            try:
-                value = float(cell)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise ModelFileError(path, f"line {number}, column {name}", "a finite number",
-                                     repr(cell))
-            row.append(value)
-        rows.append(row)
+        rows.append([number_from_text(cell, path, f"line {number}, column {name[:40]}")
+                     for name, cell in zip(header, cells)])
         lines.append(number)
     if header is None:
         raise ModelFileError(path, "", "a header line naming the columns", "none")

@@ -31,8 +31,8 @@ import yaml
 from pydantic import Field, field_validator, model_validator
 
 from armkit.errors import InputError, ModelFileError
-from armkit.io.documents import (Number, StrictModel, UnitsField, found_text, kind_of,
-                                 read_yaml, validated)
+from armkit.io.documents import (Number, StrictModel, UnitsField, checked_path, found_text,
+                                 kind_of, read_yaml, validated)
 from armkit.model.chain import JERK_PER_ACCELERATION, Chain, Limits
 from armkit.model.collision import CollisionShape, CollisionSpec
 from armkit.model.dh import DHRow, DHTable, chain_from_dh
@@ -750,6 +750,7 @@ def robot_named_in(file: str | Path, name: str, field: str = "robot") -> Robot:
         Naming `file` and `field` when the name is neither built in nor a loadable file (an
         invalid robot file raises its own ModelFileError, naming that file).
     """
+    checked_path(name, str(file), field)        # the one path rule, before any look-up
     try:
         return robot(name, Path(file).parent)
     except ModelFileError:

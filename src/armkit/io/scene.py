@@ -34,19 +34,23 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from armkit.errors import ModelFileError
-from armkit.io.documents import StrictModel, UnitsField, read_text, read_yaml, validated
+from armkit.io.documents import (SEED, Fraction, Positive, StrictModel, UnitsField, Value,
+                                 bounded, checked_path, found_text, number_from_text, read_text,
+                                 read_yaml, validated, whole)
 from armkit.io.robot_files import robot_named_in
 from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
 from armkit.spatial import pose_from_xyz_rpy, quat_to_matrix
 
-Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
-Positive = Annotated[float, Field(gt=0)]
+Vector3 = Annotated[list[Value], Field(min_length=3, max_length=3)]
+MAX_OBSTACLES = 100_000         # obstacles in one file, and shapes of one MoveIt object
+MAX_NAME = 200                  # characters of an obstacle's name
+Name = Annotated[str, Field(max_length=MAX_NAME)]
 
 
 class _BoxField(StrictModel):
     type: Literal["box"]
-    name: str = ""
+    name: Name = ""
     min: Vector3 | None = None
     max: Vector3 | None = None
     size: Annotated[list[Positive], Field(min_length=3, max_length=3)] | None = None
@@ -67,14 +71,14 @@ class _BoxField(StrictModel):
 
 class _SphereField(StrictModel):
     type: Literal["sphere"]
-    name: str = ""
+    name: Name = ""
     center: Vector3
     radius: Positive
 
 
 class _CylinderField(StrictModel):
     type: Literal["cylinder"]
-    name: str = ""
+    name: Name = ""
     radius: Positive
     length: Positive
     xyz: Vector3 = [0.0, 0.0, 0.0]
@@ -83,7 +87,7 @@ class _CylinderField(StrictModel):
 
 class _CapsuleField(StrictModel):
     type: Literal["capsule"]
-    name: str = ""
+    name: Name = ""
     a: Vector3
     b: Vector3
     radius: Positive
@@ -100,24 +104,24 @@ class _PoseField(StrictModel):
 
 class _PlannerField(StrictModel):
     name: Literal["rrtconnect", "rrt", "rrtstar"] = "rrtconnect"
-    seed: int = 0
+    seed: whole(*SEED) = 0
     resolution: Positive | None = None
     step: Positive | None = None
-    max_iterations: Annotated[int, Field(gt=0)] | None = None
-    time_limit: Positive = 10.0
-    goal_bias: Annotated[float, Field(ge=0, le=1)] = 0.05
-    waypoints: Annotated[int, Field(ge=2)] | None = None
-    simplify: bool = True
+    max_iterations: whole(1, 100_000_000) | None = None
+    time_limit: bounded(0.0, 3600.0, low_open=True) = 10.0
+    goal_bias: Fraction = 0.05
+    waypoints: whole(2, 100_000) | None = None
+    simplify: bool = Field(True, strict=True)
 
 
 class _SceneFile(StrictModel):
     units: UnitsField
     robot: str | None = None
     radius: Positive | None = None
-    obstacles: list[Obstacle] = []
+    obstacles: Annotated[list[Obstacle], Field(max_length=MAX_OBSTACLES)] = []
     scene: str | None = None
-    start: list[float] | None = None
-    goal: list[float] | list[list[float]] | None = None
+    start: list[Value] | None = None
+    goal: list[Value] | list[list[Value]] | None = None
     goal_pose: _PoseField | None = None
     planner: _PlannerField = _PlannerField()
 
@@ -188,7 +192,8 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
     units = Units(spec.units.length, spec.units.angle)
     obstacles = [obstacle_from_field(o, units) for o in spec.obstacles]
     if spec.scene is not None:
-        obstacles += list(read_moveit_scene(Path(path).parent / spec.scene))
+        obstacles += list(read_moveit_scene(checked_path(spec.scene, path, "scene",
+                                                         Path(path).parent)))
     scene = Scene(obstacles)
     robot = None
     if spec.robot is not None:
@@ -247,13 +252,22 @@ class _Lines:
 
     def numbers(self, count: int, what: str) -> np.ndarray:
         number, line = self.next(what)
+        words = line.split()
+        if len(words) != count:
+            raise ModelFileError(self.path, f"line {number}", what, found_text(line))
         try:
-            values = np.array([float(x) for x in line.split()])
-        except ValueError:
-            raise ModelFileError(self.path, f"line {number}", what, repr(line)) from None
-        if values.shape != (count,) or not np.isfinite(values).all():
-            raise ModelFileError(self.path, f"line {number}", what, repr(line))
-        return values
+            return np.array([number_from_text(w, self.path, "") for w in words])
+        except ModelFileError as err:
+            raise ModelFileError(self.path, f"line {number}", f"{what}, each {err.expected}",
+                                 err.found) from None
+
+    def count(self, what: str, most: int, least: int = 1) -> int:
+        number, line = self.next(what)
+        try:
+            return number_from_text(line, self.path, "", least, most, integer=True)
+        except ModelFileError as err:
+            raise ModelFileError(self.path, f"line {number}", f"{what}: {err.expected}",
+                                 err.found) from None
 
 
 def _pose(lines: _Lines) -> np.ndarray:
@@ -287,15 +301,14 @@ def read_moveit_scene(path: str | Path) -> Scene:
             raise ModelFileError(lines.path, f"line {number}", "'* object name' or '.'",
                                  repr(line))
         name = line[1:].strip()
+        if len(name) > MAX_NAME:
+            raise ModelFileError(lines.path, f"line {number}", f"an object name of at most "
+                                 f"{MAX_NAME} characters", f"{len(name)} characters")
         T_object = np.eye(4)
         newer = len(lines.peek()[1].split()) == 3            # the newer layout: an object pose
         if newer:
             T_object = _pose(lines)
-        number, line = lines.next("the number of shapes")
-        if not line.isdigit() or int(line) < 1:
-            raise ModelFileError(lines.path, f"line {number}", "the number of shapes (>= 1)",
-                                 repr(line))
-        for _ in range(int(line)):
+        for _ in range(lines.count("the number of shapes", MAX_OBSTACLES)):
             number, kind = lines.next("a shape type (box, sphere, cylinder)")
             if kind == "box":
                 dims = lines.numbers(3, "box sizes x y z (m)")
@@ -318,8 +331,9 @@ def read_moveit_scene(path: str | Path) -> Scene:
                 obstacles.append(Sphere(T[:3, 3], dims[0], name))
             else:
                 obstacles.append(Cylinder(dims[0], dims[1], T, name))
-        if newer and lines.peek()[1].isdigit():              # subframes (named poses): skipped
-            for _ in range(int(lines.next("the number of subframes")[1])):
+        if newer and lines.peek()[1].isascii() and lines.peek()[1].isdigit():
+            # subframes (named poses): skipped
+            for _ in range(lines.count("the number of subframes", MAX_OBSTACLES, 0)):
                 lines.next("a subframe name")
                 _pose(lines)
     return Scene(obstacles)

@@ -50,7 +50,8 @@ from armkit.drives.registers import RegisterMap
 from armkit.errors import ModelFileError
 from armkit.io.camera import read_camera_mount
 from armkit.io.clouds import Cloud, read_cloud
-from armkit.io.documents import StrictModel, UnitsField, read_yaml, validated
+from armkit.io.documents import (SEED, Positive, StrictModel, UnitsField, Value, bounded,
+                                 read_yaml, validated, whole)
 from armkit.io.register_maps import builtin_register_map, load_register_map
 from armkit.io.robot_files import MAX_LENGTH, robot_named_in
 from armkit.io.scene import Obstacle, obstacle_from_field, read_scene
@@ -61,7 +62,7 @@ from armkit.model.robot import Robot, Units
 from armkit.planning.scene import Scene
 from armkit.spatial import pose_from_xyz_rpy
 
-Vector3 = Annotated[list[float], Field(min_length=3, max_length=3)]
+Vector3 = Annotated[list[Value], Field(min_length=3, max_length=3)]
 
 
 # --- what a task is ------------------------------------------------------------------------
@@ -219,16 +220,16 @@ class CameraField(StrictModel):
     xyz: Vector3 | None = None
     rpy: Vector3 = [0.0, 0.0, 0.0]
     file: str | None = None
-    q: list[float] | None = None
+    q: list[Value] | None = None
 
 
 class TargetField(StrictModel):
     xyz: Vector3 | None = None
     rpy: Vector3 | None = None
-    yaw: float | None = None
+    yaw: Value | None = None
     cloud: str | None = None            # a point cloud of the inlet (armkit.io.clouds)
     kind: Literal["pipe", "hole"] = "pipe"
-    radius: float | None = Field(None, gt=0)          # the inlet's, length units; else fitted
+    radius: Positive | None = None                     # the inlet's, length units; else fitted
     cloud_units: Literal["mm", "m"] | None = None     # when the cloud file declares none
     mask: str | None = None             # the IK task: position, position+yaw, pose, ...
 
@@ -240,24 +241,24 @@ class SceneField(StrictModel):
 
 class PlannerField(StrictModel):
     name: Literal["rrtconnect", "rrt", "rrtstar"] = "rrtconnect"
-    seed: int = 0
-    time_limit: float = Field(5.0, gt=0, le=3600)
-    max_iterations: int | None = Field(None, gt=0, le=10_000_000)
-    resolution: float | None = Field(None, gt=0)     # length units: how far any arm point moves
-    radius: float | None = Field(None, gt=0)         # default link capsules' radius, length units
+    seed: whole(*SEED) = 0
+    time_limit: bounded(0.0, 3600.0, low_open=True) = 5.0
+    max_iterations: whole(1, 10_000_000) | None = None
+    resolution: Positive | None = None               # length units: how far any arm point moves
+    radius: Positive | None = None                   # default link capsules' radius, length units
 
 
 class MotionField(StrictModel):
-    waypoints: int = Field(10, ge=2, le=10_000)
-    speed: float = Field(1.0, gt=0, le=1)              # fraction of the joint limits
+    waypoints: whole(2, 10_000) = 10
+    speed: bounded(0.0, 1.0, low_open=True) = 1.0             # fraction of the joint limits
 
 
 class DriveField(StrictModel):
     host: str = "127.0.0.1"
-    port: int = Field(502, ge=1, le=65535)
+    port: whole(1, 65535) = 502
     map: str | None = None
-    timeout: float = Field(1.0, gt=0, le=60)
-    arrival_timeout: float = Field(30.0, gt=0, le=3600)
+    timeout: bounded(0.0, 60.0, low_open=True) = 1.0
+    arrival_timeout: bounded(0.0, 3600.0, low_open=True) = 30.0
 
 
 class TaskFile(StrictModel):
@@ -267,7 +268,7 @@ class TaskFile(StrictModel):
     robot: str
     camera: CameraField | None = None
     target: TargetField
-    start: list[float] | None = None
+    start: list[Value] | None = None
     scene: SceneField | None = None
     planner: PlannerField = PlannerField()
     motion: MotionField = MotionField()

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,11 +39,11 @@ from pydantic import Field, field_validator, model_validator
 
 from armkit import trajectory as tj
 from armkit.errors import ArmkitError, InputError, ModelFileError
-from armkit.io.documents import StrictModel, read_yaml, validated
+from armkit.io.documents import Value, StrictModel, bounded, read_yaml, validated, whole
 from armkit.model import Robot
 
 Profile = Literal["cubic", "quintic", "trapezoidal", "jerk-limited"]
-Limit = float | list[float] | None
+Limit = Value | list[Value] | None
 # Ranges that make sense, in file units: beyond them the arithmetic overflows or underflows
 # (1e308 s, a jerk of 1e-300) long before a motion could mean anything.
 VALUE = 1e9             # joint values, file units
@@ -70,15 +70,15 @@ class CaseFile(StrictModel):
     """A trajectory case as its file (or the command's options) gives it, in file units."""
 
     robot: str = Field(max_length=4096)
-    start: list[float] | None = None
-    goal: list[float] | None = None
+    start: list[Value] | None = None
+    goal: list[Value] | None = None
     profiles: list[Profile] = ["quintic"]
-    duration: float | None = Field(None, gt=0, le=TIME)
-    joints: list[int | str] | None = None
-    times: list[float] | None = None
-    points: list[list[float]] | None = None
-    hold: list[float] | None = None
-    patterns: list[str | int] | None = None
+    duration: bounded(0.0, TIME, low_open=True) | None = None
+    joints: list[whole(-10_000, 10_000) | Annotated[str, Field(max_length=200)]] | None = None
+    times: list[Value] | None = None
+    points: list[list[Value]] | None = None
+    hold: list[Value] | None = None
+    patterns: list[Annotated[str, Field(max_length=200)] | whole(0, 10**9)] | None = None
     velocity: Limit = None
     acceleration: Limit = None
     jerk: Limit = None
@@ -195,7 +195,9 @@ def load_case(source: str, overrides: dict[str, Any] | None = None) -> tuple[Cas
     """
     document = _case_document(source)
     from_file = document is not None
-    where = source if from_file else "command line"
+    where = source if from_file else (
+        f"{source} (read as a robot: it has no robot field) and the command line"
+        if source.endswith((".yaml", ".yml")) else "command line")
     document = {**document} if from_file else {"robot": source}
     document.update({k: v for k, v in (overrides or {}).items() if v is not None})
     return validated(where, document, CaseFile), from_file
@@ -221,8 +223,18 @@ def read_case(source: str, overrides: dict[str, Any] | None = None) -> Trajector
         A bad field, a start equal to the goal, or a position outside the joint limits.
     """
     case, from_file = load_case(source, overrides)
-    robot = _robot(case.robot, source if from_file else "")
-    trajectories, moving, (vmax, amax) = build(case, robot)
+    try:
+        robot = _robot(case.robot, source if from_file else "")
+        trajectories, moving, (vmax, amax) = build(case, robot)
+    except ModelFileError:
+        raise
+    except InputError as err:
+        if not from_file:
+            raise
+        # The file's mistake, named with the file: "velocity: expected ..., found 0".
+        field, _, rest = str(err).partition(": ")
+        expected, _, found = rest.removeprefix("expected ").partition(", found ")
+        raise ModelFileError(source, field, expected, found) from None
     return TrajectoryCase(robot, trajectories, moving, case.times is not None, vmax, amax,
                           source if from_file else "")
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from armkit.errors import ModelFileError
-from armkit.io.documents import read_text
+from armkit.io.documents import check_number, number_from_text, read_text
 from armkit.model import Robot
 
 TIME_COLUMNS = ("t", "time")
@@ -57,7 +57,7 @@ def read_waypoints(path: Path, robot: Robot) -> tuple[np.ndarray, np.ndarray | N
                         f"with the time first")
             raise ModelFileError(str(path), f"line {line}", expected,
                                  ", ".join(c.strip() for c in row))
-        _finite(values, str(path), line, row)
+        _finite(row, str(path), line)
         if header:
             q.append([values[columns.index(name)] for name in robot.joint_names])
             if "t" in columns:
@@ -72,18 +72,18 @@ def read_waypoints(path: Path, robot: Robot) -> tuple[np.ndarray, np.ndarray | N
 
 
 def _numbers(row: list[str]) -> list[float] | None:
+    """The row's numbers, or None if a cell is not a plain decimal (a header's names)."""
     try:
-        return [float(c) for c in row]
+        return [float(c) if c.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
+                else float(check_number(c, -math.inf, math.inf)) for c in row]
     except ValueError:
         return None
 
 
-def _finite(values: list[float], path: str, line: int, row: list[str]) -> None:
-    """NaN and inf parse as numbers, but no joint goes there."""
-    bad = [c.strip() for c, v in zip(row, values) if not math.isfinite(v)]
-    if bad:
-        raise ModelFileError(path, f"line {line}", "finite numbers",
-                             ", ".join(c.strip() for c in row) + f" ({bad[0]} is not)")
+def _finite(row: list[str], path: str, line: int) -> None:
+    """Every cell a finite number within the files' range (`check_number`)."""
+    for column, cell in enumerate(row, start=1):
+        number_from_text(cell, path, f"line {line}, column {column}")
 
 
 def _columns(header: list[str] | None, path: str, robot: Robot) -> list[str]:
@@ -112,6 +112,8 @@ def _json_waypoints(text: str, path: str, robot: Robot):
         q, t = doc["q"], doc.get("t")
     else:
         q, t = doc, None
+    for name, values in (("q", q), ("t", t)):
+        _json_numbers(values, path, name)
     try:
         q = np.array(q, dtype=float)
         t = None if t is None else np.array(t, dtype=float)
@@ -137,3 +139,19 @@ def _json_waypoints(text: str, path: str, robot: Robot):
     return q, t
 
 
+def _json_numbers(values, path: str, name: str, depth: int = 0) -> None:
+    """Every leaf of (nested lists of) `values` a number by `check_number` (true, "1" and
+    1e400 are not)."""
+    if values is None and depth == 0:
+        return
+    if isinstance(values, list) and depth < 2:
+        for i, value in enumerate(values):
+            _json_numbers(value, path, f"{name}[{i}]", depth + 1)
+        return
+    try:
+        if isinstance(values, str):            # "1" in JSON is text, not a number
+            raise ValueError(f"expected a number, found {values[:40]!r}")
+        check_number(values)
+    except ValueError as err:
+        expected, _, found = str(err).removeprefix("expected ").partition(", found ")
+        raise ModelFileError(path, name, expected, found) from None

@@ -19,7 +19,7 @@ the wall (the sensor's y where up is normal to the wall); x = y cross z.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -51,6 +51,11 @@ class SyntheticScene:
     noise : float
         Standard deviation of the range noise, m.
     seed : int or None
+    labels : ndarray, shape (N,), int, or None
+        What each point hit: 0 the wall, 1 the inlet (or the hole's back surface), 2 + i the
+        i-th clutter object, -1 an outlier (`cluttered_scene`; None for `synthetic_scene`).
+    objects : tuple of Clutter
+        The clutter objects (`cluttered_scene`).
     """
 
     points: NDArray
@@ -62,6 +67,8 @@ class SyntheticScene:
     outlier: NDArray
     noise: float
     seed: int | None
+    labels: NDArray | None = field(default=None, repr=False)
+    objects: tuple = ()
 
 
 def _target_frame(normal: NDArray, origin: NDArray) -> NDArray:
@@ -251,3 +258,221 @@ def random_scene(seed: int, kind: Literal["pipe", "hole"] = "pipe", *, noise: fl
                   offset=tuple(rng.uniform(-0.15, 0.15, 2)))
     params.update(kwargs)
     return synthetic_scene(kind, noise=noise, n_points=n_points, seed=seed, **params)
+
+
+# --- clutter: what stands on a wall and is not an inlet -------------------------------------
+
+CLUTTER = ("dome", "box", "small_box", "bar", "bolt", "handle")
+
+
+@dataclass(frozen=True)
+class Clutter:
+    """An object on the wall that is not the inlet.
+
+    Attributes
+    ----------
+    kind : {"dome", "box", "small_box", "bar", "bolt", "handle"}
+    centre : ndarray, shape (3,)
+        Where it stands on the wall (its foot's centre), sensor frame, m.
+    size : float
+        Radius of the smallest circle about `centre` in the wall's plane that holds it, m.
+    parts : tuple
+        Its surfaces: ("sphere", centre, radius), ("box", T, size), ("cylinder", a, b, radius)
+        (capped), in the sensor frame.
+    """
+
+    kind: str
+    centre: NDArray
+    size: float
+    parts: tuple
+
+
+def _sphere_ranges(d: NDArray, centre: NDArray, radius: float) -> NDArray:
+    """Range along rays d (M, 3) from the origin to a sphere's near side (inf: a miss)."""
+    b = d @ centre
+    c = centre @ centre - radius**2
+    disc = b * b - c
+    t = b - np.sqrt(np.maximum(disc, 0.0))
+    return np.where((disc >= 0) & (t > 0), t, np.inf)
+
+
+def _box_ranges(d: NDArray, T: NDArray, size: NDArray) -> NDArray:
+    """Range along rays d (M, 3) from the origin to a box of `size` at pose T (slabs)."""
+    R, origin = T[:3, :3], T[:3, 3]
+    o = -origin @ R                               # the sensor in the box's frame
+    dl = d @ R
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (-size / 2 - o) / dl
+        t2 = (size / 2 - o) / dl
+    lo = np.nanmax(np.where(np.isnan(t1), -np.inf, np.minimum(t1, t2)), axis=1)
+    hi = np.nanmin(np.where(np.isnan(t1), np.inf, np.maximum(t1, t2)), axis=1)
+    return np.where((lo <= hi) & (lo > 0), lo, np.inf)
+
+
+def _capped_cylinder_ranges(d: NDArray, a: NDArray, b: NDArray, radius: float) -> NDArray:
+    """Range along rays d (M, 3) from the origin to a closed cylinder from a to b."""
+    axis = b - a
+    length = float(np.linalg.norm(axis))
+    axis = axis / length
+    side, _, _ = _cylinder_hits(d, a, axis, radius, length)
+    t = side
+    for centre, normal in ((a, -axis), (b, axis)):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tc = (centre @ normal) / (d @ normal)
+        hit = d * tc[:, None] - centre
+        inside = (tc > 0) & (np.linalg.norm(hit, axis=1) <= radius)
+        t = np.minimum(t, np.where(inside, tc, np.inf))
+    return t
+
+
+def _part_ranges(d: NDArray, part: tuple) -> NDArray:
+    kind = part[0]
+    if kind == "sphere":
+        return _sphere_ranges(d, part[1], part[2])
+    if kind == "box":
+        return _box_ranges(d, part[1], part[2])
+    return _capped_cylinder_ranges(d, part[1], part[2], part[3])
+
+
+def clutter_object(kind: str, foot: NDArray, normal: NDArray, along: NDArray,
+                   rng: np.random.Generator) -> Clutter:
+    """A clutter object of `kind` with random dimensions standing on the wall at `foot`.
+
+    Parameters
+    ----------
+    kind : one of CLUTTER
+    foot : array_like, shape (3,)
+        Its place on the wall, m.
+    normal : array_like, shape (3,)
+        The wall's unit normal, toward the sensor.
+    along : array_like, shape (3,)
+        A unit direction in the wall (a bar's or handle's length, a box's edge).
+    rng : numpy.random.Generator
+    """
+    n, u = np.asarray(normal, float), np.asarray(along, float)
+    v = np.cross(n, u)
+    foot = np.asarray(foot, float)
+    if kind == "dome":
+        r = rng.uniform(0.03, 0.06)
+        return Clutter(kind, foot, r, (("sphere", foot, r),))
+    if kind in ("box", "small_box"):
+        if kind == "box":
+            w, h, depth = rng.uniform(0.06, 0.12), rng.uniform(0.06, 0.12), rng.uniform(0.03, 0.10)
+        else:
+            w, h = rng.uniform(0.02, 0.05), rng.uniform(0.02, 0.05)
+            depth = rng.uniform(0.015, 0.04)
+        T = np.eye(4)
+        T[:3, 0], T[:3, 1], T[:3, 2] = u, v, n
+        T[:3, 3] = foot + n * depth / 2
+        return Clutter(kind, foot, float(np.hypot(w, h) / 2),
+                       (("box", T, np.array([w, h, depth])),))
+    if kind == "bar":
+        r, length, off = rng.uniform(0.01, 0.02), rng.uniform(0.15, 0.30), rng.uniform(0.02, 0.06)
+        a, b = foot - u * length / 2 + n * (off + r), foot + u * length / 2 + n * (off + r)
+        return Clutter(kind, foot, length / 2 + r, (("cylinder", a, b, r),))
+    if kind == "bolt":
+        r, height = rng.uniform(0.006, 0.012), rng.uniform(0.005, 0.010)
+        return Clutter(kind, foot, r, (("cylinder", foot - 0.001 * n, foot + height * n, r),))
+    if kind == "handle":
+        r, length = rng.uniform(0.008, 0.012), rng.uniform(0.10, 0.20)
+        post = rng.uniform(0.04, 0.07)
+        ends = (foot - u * length / 2, foot + u * length / 2)
+        parts = tuple(("cylinder", e - 0.001 * n, e + post * n, r) for e in ends)
+        parts += (("cylinder", ends[0] + post * n, ends[1] + post * n, r),)
+        return Clutter(kind, foot, length / 2 + r, parts)
+    raise InputError(f"kind: expected one of {', '.join(CLUTTER)}, found {kind!r}")
+
+
+def cluttered_scene(seed: int, target: Literal["pipe", "hole"] | None = "pipe",
+                    clutter: tuple[str, ...] | None = None, *, noise: float = 0.002,
+                    n_points: int = 30_000, gap: float = 0.08, rings: int | None = None,
+                    outliers: float = 0.0, radius: float = 0.04, length: float = 0.10,
+                    depth: float | None = 0.15) -> SyntheticScene:
+    """A scan of a wall with clutter (domes, boxes, bars, bolts, handles) and a pipe, a hole or
+    no inlet at all, its pose drawn from `seed` as in `random_scene`.
+
+    Parameters
+    ----------
+    seed : int
+    target : {"pipe", "hole"} or None
+        None: the wall holds only clutter (no target; `T_sensor_target` is NaN).
+    clutter : tuple of str, optional
+        The kinds of clutter object (see `CLUTTER`), one object each; default two kinds drawn
+        from `seed`.
+    noise, n_points, rings, outliers, radius, length, depth
+        As for `synthetic_scene`.
+    gap : float
+        Least clear distance along the wall between any two objects (inlet included), m.
+
+    Returns
+    -------
+    SyntheticScene
+        With `labels` (per point: 0 wall, 1 inlet, 2 + i clutter object i, -1 outlier) and
+        `objects`.
+    """
+    rng = np.random.default_rng([seed, 25])
+    if clutter is None:
+        clutter = tuple(rng.choice(CLUTTER, 2, replace=False))
+    kind = target or "hole"
+    base = random_scene(seed, kind, noise=noise, n_points=n_points, rings=rings,
+                        outliers=0.0, radius=radius if target else 1e-6, length=length,
+                        depth=depth if target else None, window=1.0)
+    normal = base.plane_normal
+    T = base.T_sensor_target
+    centre = T[:3, 3] - (length * normal if target == "pipe" else 0.0)
+    u, v = T[:3, 0], T[:3, 1]
+    placed = [(centre, radius if target else 0.0)]
+    objects = []
+    for k in clutter:
+        for _ in range(200):
+            offset = rng.uniform(-0.35, 0.35, 2)
+            foot = centre + offset[0] * u + offset[1] * v
+            angle = rng.uniform(0, np.pi)
+            along = np.cos(angle) * u + np.sin(angle) * v
+            obj = clutter_object(k, foot, normal, along, rng)
+            if all(np.linalg.norm(foot - c) > r + obj.size + gap for c, r in placed):
+                break
+        placed.append((obj.centre, obj.size))
+        objects.append(obj)
+    # Re-cast every ray of the base scan against the clutter: the nearest surface wins.
+    d = base.points / np.linalg.norm(base.points, axis=1, keepdims=True)
+    t = np.linalg.norm(base.points, axis=1)
+    labels = np.zeros(len(d), np.int64)
+    h = base.points @ normal + base.plane_offset
+    if target is not None:
+        near = np.linalg.norm(np.cross(base.points - centre, normal), axis=1) < radius + 0.01
+        labels[near & ((h > 3 * noise + 1e-4) if target == "pipe" else (h < -3 * noise - 1e-4))] = 1
+    noise_part = t - _true_ranges(d, base, centre, normal, target, radius, length, depth)
+    for i, obj in enumerate(objects):
+        for part in obj.parts:
+            tp = _part_ranges(d, part)
+            closer = tp < t - noise_part
+            t = np.where(closer, tp + noise_part, t)
+            labels[closer] = 2 + i
+    points = d * t[:, None]
+    outlier = np.zeros(len(points), bool)
+    n_out = int(round(outliers * len(points)))
+    if n_out:
+        idx = rng.choice(len(points), n_out, replace=False)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        points[idx] = rng.uniform(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo), (n_out, 3))
+        outlier[idx] = True
+        labels[idx] = -1
+    T_truth = T if target is not None else np.full((4, 4), np.nan)
+    return SyntheticScene(points=points, T_sensor_target=T_truth, kind=target or "none",
+                          radius=float(radius) if target else float("nan"),
+                          plane_normal=normal, plane_offset=base.plane_offset, outlier=outlier,
+                          noise=float(noise), seed=seed, labels=labels, objects=tuple(objects))
+
+
+def _true_ranges(d, base, centre, normal, target, radius, length, depth) -> NDArray:
+    """The noise-free range of each ray of `base` (the wall, the pipe, the hole's back)."""
+    t = -base.plane_offset / (d @ normal)
+    if target == "pipe":
+        outer, _, _ = _cylinder_hits(d, centre, normal, radius, length)
+        t = np.minimum(t, outer)
+    elif target == "hole" and depth is not None:
+        on_wall = d * t[:, None]
+        in_hole = np.linalg.norm(on_wall - centre, axis=1) < radius
+        t = np.where(in_hole, -(base.plane_offset + depth) / (d @ normal), t)
+    return t

@@ -1,33 +1,48 @@
-"""The water inlet in a scan of the train's side (paper 1): its centre and axis, sensor and base.
+"""The water inlet in a scan of the train's side (paper 1): its centre and axis, sensor and base,
+reported only with evidence.
 
 Pipeline (each step a public function of `armkit.perception`):
 
 1. optional voxel down-sampling (`voxel_downsample`);
-2. the wall: `ransac_plane` (adaptive RANSAC, least-squares refits);
-3. candidates: points more than `min_height` off the wall on the sensor's side;
+2. the scan measured on itself (`measure_scan`): the wall by adaptive RANSAC and least-squares
+   refits in a band of 3.5 robust standard deviations of the wall's own residuals, the range
+   noise along the rays, the point spacing and the scan's rows (a LiDAR's rings);
+3. candidates: points standing off the wall on the sensor's side, beyond the band and 4
+   robust standard deviations;
 4. optional statistical outlier removal among the candidates (`statistical_outliers`; off by
    default, see `detect_target`);
-5. clusters: `dbscan` on a k-d tree;
-6. the target cluster, by the rule `choose` (below);
-7. a pipe: a circle fitted in the wall's plane to the cluster's points projected on it
-   (`fit_circle`, radius free or known). Only the sensor-facing side of a pipe and the inside of
-   its far side are seen, so the cluster's centroid lies off the axis (by about 2r/pi on the
-   seen side); it is reported for comparison only. The wall is then refitted without the points
-   around the inlet and the circle fitted again.
-   A hole: the empty region of the wall's inliers (an occupancy grid), then its rim: per
-   angular sector the innermost wall point and, where rays went through the hole, the outermost
-   crossing of those rays with the wall; the circle is fitted to the middle of the two, or,
-   without rays through, to the innermost wall points moved in by half the point spacing.
+5. clusters: `dbscan` on a k-d tree, its radius from the scan (4 point spacings, 1.5 ring gaps:
+   an object's points are linked across the rings of a sparse LiDAR);
+6. every cluster weighed as a pipe standing square to the wall, seen from the side: a circle
+   fitted in the wall's plane to its points projected on it (`fit_circle`), and the evidence
+   (below); or, for a hole, every opening in the wall weighed (`armkit.perception.holes`);
+7. the target among the candidates that pass, by the rule `choose`; the runner-up and the rule
+   in the result. None passing is "no target", with the reason of the candidate that came
+   nearest;
+8. for a pipe, the wall refitted without the points around the inlet and the circle fitted
+   again.
+
+A pipe's evidence, in terms of the range noise σ measured on the wall: range noise moves a
+point along its ray, so in the wall's plane by σ sin θ (θ the ray's angle to the wall's normal,
+the pipe's axis). The circle's RMS over the cluster's points is at most 3 times the RMS of
+σ sin θ over them, plus 0.5 mm and 1 % of the radius (a pipe a little off square to the wall);
+at least 90 % of the points lie within that band of the circle (a box's faces and a dome's cap
+do not); at most 5 % lie inside it (a pipe's mouth is open: a bolt's head, a box's front face, a
+dome fill the circle); the points span at least 60 deg of it, on the far side of the points from
+the sensor (the sensor sees the pipe's near side); its radius is at most `max_extent` (or the
+known one). Only the sensor-facing side of a pipe (and the inside of its far side) is seen, so
+the cluster's centroid lies off the axis (by about 2r/pi on the seen side); it is reported for
+comparison only.
 
 The target frame (see `armkit.perception.synthetic`): z the inlet's axis (the wall's normal,
-pointing out of the wall toward the sensor: the pipe is taken to stand square to the wall), y the
-sensor's z projected on the wall, origin the pipe's mouth (its centre at the height of the
-cluster's 99th percentile above the wall) or the hole's centre on the wall.
+pointing out of the wall toward the sensor), y the sensor's z projected on the wall, origin the
+pipe's mouth (its centre at the height of the cluster's 99th percentile above the wall) or the
+hole's centre on the wall.
 
-Rule for the target cluster (`choose`): among clusters of at least `min_cluster` points whose
-extent in the wall's plane fits the inlet (at most 3 radii from their centroid when the radius
-is known, else at most `max_extent`), the one with the most points ("largest", the default), the
-one nearest the sensor ("nearest"), or the one standing highest off the wall ("highest").
+Rule among the candidates that pass (`choose`): the one with the most points (a pipe) or the
+largest radius (a hole) ("largest", the default), the one nearest the sensor ("nearest"), or
+the one standing highest off the wall (a pipe) or highest up in the sensor's frame (a hole)
+("highest").
 """
 
 from __future__ import annotations
@@ -38,143 +53,76 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import ndimage
 
 from armkit.errors import InputError
 from armkit.io.clouds import Cloud, check_scale, read_cloud
+from armkit.perception.circles import Circle, fit_circle
 from armkit.perception.clusters import dbscan
 from armkit.perception.filters import statistical_outliers, voxel_downsample
-from armkit.perception.plane import Plane, fit_plane_lsq, points_array, ransac_plane
+from armkit.perception.holes import Opening, grid_openings, row_openings
+from armkit.perception.plane import Plane, fit_plane_lsq, points_array
+from armkit.perception.scan import BAND_SIGMAS, START_BAND, Scan, measure_scan
 from armkit.perception.synthetic import target_frame
 from armkit.spatial import as_transform
 
 CHOICES = ("largest", "nearest", "highest")
 MIN_ARC = np.deg2rad(60.0)      # rad: a shorter arc does not pin a circle's centre down
+FIT_SIGMAS = 3.0                # a pipe's fit RMS, in RMS of the in-plane noise sigma sin(theta)
+FIT_FLOOR = 5e-4                # m: added to the fit's limit (a pipe a little off square)
+FIT_RADIUS_SHARE = 0.01         # of the radius: added to the fit's limit
+MIN_ON_CIRCLE = 0.90            # share of a pipe's points within the band of its circle
+MAX_INSIDE = 0.05               # share of a pipe's points inside its circle (an open mouth)
+MAX_CLUSTERS = 64               # clusters weighed at most, the largest first
 
 
-@dataclass(frozen=True)
-class Circle:
-    """A circle fitted to points in a plane.
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    """A cluster (pipe) or an opening (hole) weighed as the inlet; lengths in m, sensor frame.
 
     Attributes
     ----------
-    centre : ndarray, shape (2,)
-    radius : float
-    rms : float
-        RMS of the radial residuals of the points kept, same unit as the points.
-    used : ndarray, shape (N,), bool
-        The points kept after the robust passes.
+    kind : {"pipe", "hole"}
+    size : int
+        Points of the cluster, or rim estimates of the opening.
+    centre : ndarray, shape (3,)
+        The circle's centre on the wall (NaN if none was fitted).
+    centroid : ndarray, shape (3,)
+        Where its points are: the cluster's, or the rim estimates' centroid on the wall.
+    radius, fit_rms, rms_limit : float
+        The fitted circle's radius and RMS, and the largest RMS the scan's noise allows.
     coverage : float
-        Angle of the arc the kept points span, rad (2 pi for a full circle).
+        Arc (rad) its points span around the circle.
+    standoff : float
+        How far it stands off the wall (99th percentile height; 0 for a hole), m.
+    distance : float
+        The centre's distance from the sensor, m.
+    reason : str
+        "ok", or why it is not the inlet.
     """
 
+    kind: str
+    size: int
     centre: NDArray
+    centroid: NDArray
     radius: float
-    rms: float
-    used: NDArray
+    fit_rms: float
+    rms_limit: float
     coverage: float
+    standoff: float
+    distance: float
+    reason: str
 
+    @property
+    def passed(self) -> bool:
+        """Whether the evidence shows it is an inlet."""
+        return self.reason == "ok"
 
-def _kasa(xy: NDArray) -> tuple[NDArray, float]:
-    """Algebraic circle fit (Kasa): centre and radius by linear least squares."""
-    mean = xy.mean(axis=0)
-    q = xy - mean
-    A = np.column_stack([2 * q, np.ones(len(q))])
-    sol, *_ = np.linalg.lstsq(A, (q * q).sum(axis=1), rcond=None)
-    centre = sol[:2]
-    return centre + mean, float(np.sqrt(max(sol[2] + centre @ centre, 0.0)))
-
-
-def _geometric(xy: NDArray, centre: NDArray, radius: float, known: bool,
-               iterations: int = 20) -> tuple[NDArray, float]:
-    """Gauss-Newton on the geometric residuals |p - c| - r (r fixed when `known`)."""
-    c, r = centre.astype(float).copy(), float(radius)
-    for _ in range(iterations):
-        diff = xy - c
-        dist = np.maximum(np.linalg.norm(diff, axis=1), 1e-12)
-        res = dist - r
-        J = -diff / dist[:, None]
-        if not known:
-            J = np.column_stack([J, -np.ones(len(xy))])
-        step, *_ = np.linalg.lstsq(J, -res, rcond=None)
-        c += step[:2]
-        if not known:
-            r += step[2]
-        if np.abs(step).max() < 1e-10:
-            break
-    return c, r
-
-
-def _coverage(angles: NDArray) -> float:
-    """Span of the arc covered by `angles` (rad): 2 pi minus the largest gap between them."""
-    if len(angles) < 2:
-        return 0.0
-    a = np.sort(np.mod(angles, 2 * np.pi))
-    gaps = np.diff(np.concatenate([a, [a[0] + 2 * np.pi]]))
-    return float(2 * np.pi - gaps.max())
-
-
-def fit_circle(xy: ArrayLike, radius: float | None = None, *, passes: int = 2,
-               cut: float = 3.0, start: ArrayLike | None = None) -> Circle:
-    """Circle through 2-D points: algebraic start, geometric least squares, robust passes.
-
-    Parameters
-    ----------
-    xy : array_like, shape (N, 2), N >= 3
-    radius : float or None
-        The known radius (same unit as xy), or None to fit it.
-    passes : int
-        Times points with a residual beyond `cut` robust standard deviations (1.4826 MAD, at
-        least 1e-4 of the radius) are set aside and the fit redone.
-    cut : float
-    start : array_like, shape (2,), optional
-        Where the iterations start from, instead of the algebraic fit's centre (on a short arc
-        a known radius fits on either side of it).
-
-    Returns
-    -------
-    Circle
-
-    Raises
-    ------
-    InputError
-        If xy is not (N, 2) finite with N >= 3, or radius is not positive.
-    """
-    p = np.asarray(xy, float)
-    if p.ndim != 2 or p.shape[1] != 2 or len(p) < 3 or not np.isfinite(p).all():
-        raise InputError(f"xy: expected at least 3 finite points of shape (N, 2), found "
-                         f"{p.shape}")
-    known = radius is not None
-    if known and not (np.isfinite(radius) and radius > 0):
-        raise InputError(f"radius: expected a positive radius, found {radius}")
-    centre, r = _kasa(p)
-    if start is not None:
-        centre = np.asarray(start, float)
-        r = float(radius) if known else float(np.linalg.norm(p - centre, axis=1).mean())
-    elif known:
-        # Start from the algebraic centre moved so that the known radius fits the arc: on a
-        # short arc the algebraic radius is off, the direction to the arc is not.
-        mean = p.mean(axis=0)
-        towards = centre - mean
-        norm = np.linalg.norm(towards)
-        if norm > 1e-12 and np.isfinite(r):
-            spread = np.linalg.norm(p - mean, axis=1).mean()
-            centre = mean + towards / norm * np.sqrt(max(radius**2 - spread**2, 0.0))
-        r = float(radius)
-    used = np.ones(len(p), bool)
-    centre, r = _geometric(p, centre, r, known)
-    for _ in range(passes):
-        res = np.linalg.norm(p - centre, axis=1) - r
-        mad = 1.4826 * np.median(np.abs(res[used] - np.median(res[used])))
-        keep = np.abs(res) <= cut * max(mad, 1e-4 * abs(r))
-        if keep.sum() < 3 or (keep == used).all():
-            break
-        used = keep
-        centre, r = _geometric(p[used], centre, r, known)
-    res = np.linalg.norm(p[used] - centre, axis=1) - r
-    angles = np.arctan2(p[used, 1] - centre[1], p[used, 0] - centre[0])
-    return Circle(centre, float(r), float(np.sqrt(np.mean(res * res))), used, _coverage(angles))
-
+    def describe(self, file_scale: float = 1e3, unit: str = "mm") -> str:
+        """One phrase: what and where it is, in `unit` (file_scale per m)."""
+        where = ", ".join(f"{x * file_scale:.4g}" for x in self.centroid) \
+            if np.isfinite(self.centroid).all() else "nowhere"
+        what = "points" if self.kind == "pipe" else "rim estimates"
+        return f"{self.size} {what} at ({where}) {unit}"
 
 @dataclass(frozen=True)
 class TargetResult:
@@ -186,7 +134,9 @@ class TargetResult:
     ----------
     success : bool
     reason : str
-        "ok" or what failed, e.g. "no cluster of at least 30 points off the wall".
+        "ok", or why there is no target: no wall, nothing off it, or each candidate's want of
+        evidence (e.g. "no pipe among 3 cluster(s) off the wall: the largest, 412 points
+        ..., fits a circle with an RMS of 6.2 mm where the range noise allows 2.9 mm").
     kind : {"pipe", "hole"}
     T_sensor_target : ndarray, shape (4, 4)
         The inlet's pose in the sensor frame, z its axis (out of the wall).
@@ -224,8 +174,23 @@ class TargetResult:
         Points with NaN or inf dropped when the cloud was read.
     source : str or None
         The cloud's file, if read from one.
-    units : str
-        The cloud file's length unit ("m" or "mm"); "m" for an array.
+    file_units : str
+        The cloud file's length unit ("m" or "mm"; "m" for an array): how to show the
+        results in the file's terms. Every length here is in m.
+    range_noise : float
+        The range noise measured on the wall (robust standard deviation along the rays), m.
+    plane_band : float
+        Half-width of the wall's band (m): points within it are the wall.
+    eps : float
+        The clustering radius used, m.
+    rows : int
+        Rows (rings) of the scan crossing the wall; 0 for a cloud without rows.
+    rule : str
+        How the target was chosen among the candidates that passed, and what else passed.
+    considered : tuple of Candidate
+        Every cluster (pipe) or opening (hole) weighed, with why it is or is not the inlet.
+    runner_up : Candidate or None
+        The candidate the rule placed second, among those that passed.
     """
 
     success: bool
@@ -250,7 +215,14 @@ class TargetResult:
     candidate_mask: NDArray = field(repr=False)
     dropped: int = 0
     source: str | None = None
-    units: str = "m"
+    file_units: str = "m"
+    range_noise: float = float("nan")
+    plane_band: float = float("nan")
+    eps: float = float("nan")
+    rows: int = 0
+    rule: str = ""
+    considered: tuple = ()
+    runner_up: "Candidate | None" = None
 
     def __post_init__(self):
         # Read-only views: the caller's own arrays (points given in) stay writeable.
@@ -281,6 +253,7 @@ def _fail(reason: str, kind: str, radius: float | None, points: NDArray, plane: 
           info: dict) -> TargetResult:
     nan = np.full((4, 4), np.nan)
     n = len(points)
+    scan = info.get("scan")
     return TargetResult(
         success=False, reason=reason, kind=kind, T_sensor_target=nan,
         T_base_target=None if info.get("T_base_sensor") is None else nan.copy(),
@@ -294,168 +267,126 @@ def _fail(reason: str, kind: str, radius: float | None, points: NDArray, plane: 
         cluster_mask=info.get("cluster_mask", np.zeros(n, bool)),
         candidate_mask=info.get("candidate_mask", np.zeros(n, bool)),
         dropped=int(info.get("dropped", 0)), source=info.get("source"),
-        units=info.get("units", "m"))
+        file_units=info.get("file_units", "m"),
+        range_noise=scan.range_noise if scan else float("nan"),
+        plane_band=scan.band if scan else float("nan"), eps=info.get("eps", float("nan")),
+        rows=scan.ring_count if scan else 0, considered=tuple(info.get("considered", ())))
 
 
-def _spacing(xy: NDArray) -> float:
-    """Typical point spacing (m) of points spread over a plane: sqrt(area / count), the area
-    being the bounding box of the middle 98 % along each axis (of at most 10,000 of them)."""
-    step = max(len(xy) // 10_000, 1)
-    lo, hi = np.percentile(xy[::step], [1, 99], axis=0)
-    area = float(np.prod(np.maximum(hi - lo, 1e-9))) / 0.98**2
-    return float(np.sqrt(area / max(len(xy), 1)))
+def _in_plane_noise(points: NDArray, normal: NDArray, range_noise: float) -> float:
+    """RMS (m) of range noise carried into the wall's plane for points seen along their rays:
+    sigma sin(theta), theta the ray's angle to the wall's normal."""
+    d = points / np.maximum(np.linalg.norm(points, axis=1, keepdims=True), 1e-12)
+    sin2 = np.maximum(1.0 - (d @ normal) ** 2, 0.0)
+    return float(range_noise * np.sqrt(np.mean(sin2)))
 
 
-def _choose(labels: NDArray, xy: NDArray, h: NDArray, cand: NDArray, min_cluster: int,
-            max_extent: float, choose: str) -> tuple[int | None, str]:
-    """The target cluster's label by the stated rule, or None and why."""
-    n_labels = labels.max() + 1
-    if n_labels <= 0:
-        return None, "no cluster among the points off the wall"
-    sizes = np.bincount(labels[labels >= 0], minlength=n_labels)
-    big = np.flatnonzero(sizes >= min_cluster)
-    if len(big) == 0:
-        return None, (f"no cluster of at least {min_cluster} points off the wall "
-                      f"(largest: {sizes.max()})")
-    plausible = []
-    for k in big:                                  # a few clusters, not points
-        members = labels == k
-        spread = np.linalg.norm(xy[members] - xy[members].mean(axis=0), axis=1).max()
-        if spread <= max_extent:
-            plausible.append(k)
-    if not plausible:
-        return None, (f"no cluster of the inlet's size: {len(big)} cluster(s) of at least "
-                      f"{min_cluster} points, each reaching more than {max_extent * 1e3:.0f} mm "
-                      "from its centre along the wall")
-    plausible = np.array(plausible)
+def _pipe_circle(xy: NDArray, radius: float | None) -> tuple[Circle, str]:
+    """The pipe's circle fitted to its points along the wall (u, v), on the far side of them
+    from the sensor's foot (0, 0): the sensor sees the pipe's near side. On a short arc a known
+    radius also fits the mirror image: then start again from the other side."""
+    circle = fit_circle(xy, radius)
+    middle = xy[circle.used].mean(axis=0)
+    if np.linalg.norm(circle.centre) < np.linalg.norm(middle):
+        mirrored = fit_circle(xy, radius, start=2 * middle - circle.centre)
+        if np.linalg.norm(mirrored.centre) < np.linalg.norm(xy[mirrored.used].mean(axis=0)):
+            return circle, ("the fitted circle lies on the sensor's side of its points, from "
+                            "either side (not a pipe seen from the side)")
+        circle = mirrored
+    return circle, "ok"
+
+
+def _weigh_pipe(points: NDArray, xy: NDArray, h: NDArray, normal: NDArray, scan: Scan,
+                radius: float | None, extent: float, origin: NDArray, u: NDArray,
+                v: NDArray) -> tuple[Candidate, Circle | None]:
+    """A cluster weighed as a pipe (see the module's note): its Candidate and circle."""
+    circle, why = _pipe_circle(xy, radius)
+    res = np.linalg.norm(xy - circle.centre, axis=1) - circle.radius
+    rms = float(np.sqrt(np.mean(res * res)))
+    sigma = _in_plane_noise(points, normal, scan.range_noise)
+    r = circle.radius if np.isfinite(circle.radius) else 0.0
+    limit = FIT_SIGMAS * sigma + FIT_FLOOR + FIT_RADIUS_SHARE * abs(r)
+    on_circle = float(np.mean(np.abs(res) <= limit))
+    inside = float(np.mean(res < -limit))
+    centre = origin + circle.centre[0] * u + circle.centre[1] * v
+    if why == "ok":
+        why = _pipe_evidence(circle, rms, limit, inside, on_circle, extent, scan.range_noise)
+    standoff = float(np.percentile(h, 99))
+    candidate = Candidate("pipe", len(points), centre, points.mean(axis=0),
+                          float(circle.radius), rms, limit, circle.coverage, standoff,
+                          float(np.linalg.norm(centre)), why)
+    return candidate, circle
+
+
+def _pipe_evidence(circle: Circle, rms: float, limit: float, inside: float, on_circle: float,
+                   extent: float, range_noise: float) -> str:
+    """"ok", or the first piece of evidence against a cluster being a pipe."""
+    mm = 1e3
+    if not (np.isfinite(circle.radius) and 0 < circle.radius <= extent):
+        return (f"it fits a circle of radius {circle.radius * mm:.4g} mm, not within 0 .. "
+                f"{extent * mm:.0f} mm")
+    if rms > limit:
+        return (f"it fits a circle with an RMS of {rms * mm:.3g} mm where the range noise "
+                f"({range_noise * mm:.3g} mm) allows {limit * mm:.3g} mm (not a pipe's side)")
+    if inside > MAX_INSIDE:
+        return (f"{inside:.0%} of its points lie inside its circle (a closed face: a box, a "
+                "dome, a bolt, not a pipe's open mouth)")
+    if on_circle < MIN_ON_CIRCLE:
+        return (f"only {on_circle:.0%} of its points lie on its circle (within "
+                f"{limit * mm:.3g} mm; a pipe's side puts at least {MIN_ON_CIRCLE:.0%} there)")
+    if circle.coverage < MIN_ARC:
+        return (f"its points span {np.degrees(circle.coverage):.0f} deg of the circle, fewer "
+                f"than {np.degrees(MIN_ARC):.0f}: too short an arc to fit")
+    return "ok"
+
+
+def _ranked(candidates: list[Candidate], choose: str) -> list[Candidate]:
+    """The candidates in the rule's order, best first."""
     if choose == "largest":
-        return int(plausible[np.argmax(sizes[plausible])]), "ok"
-    score = []
-    for k in plausible:
-        members = labels == k
-        score.append(np.linalg.norm(cand[members], axis=1).mean() if choose == "nearest"
-                     else -np.percentile(h[members], 99))
-    return int(plausible[int(np.argmin(score))]), "ok"
+        key = [-(c.size if c.kind == "pipe" else c.radius) for c in candidates]
+    elif choose == "nearest":
+        key = [c.distance for c in candidates]
+    else:
+        key = [-(c.standoff if c.kind == "pipe" else c.centre[2]) for c in candidates]
+    return [candidates[i] for i in np.argsort(key, kind="stable")]
 
 
-def _hole(p: NDArray, plane: Plane, u: NDArray, v: NDArray, radius: float | None,
-          threshold: float, max_extent: float
-          ) -> tuple[Circle | None, str, NDArray, NDArray]:
-    """The hole in the wall: its circle in (u, v) coordinates, or None and why.
+def _rule_text(kind: str, choose: str, passed: list[Candidate], k: float, unit: str) -> str:
+    what = {"largest": "the most points" if kind == "pipe" else "the largest radius",
+            "nearest": "the nearest to the sensor",
+            "highest": "the highest off the wall" if kind == "pipe" else "the highest up"}[choose]
+    if len(passed) == 1:
+        return f"the only {kind} that passed"
+    return (f"{what} of {len(passed)} {kind}s that passed; runner-up "
+            f"{passed[1].describe(k, unit)}")
 
-    Returns the circle, the reason, the rim's wall points (mask over p) and the rim's 2-D
-    points the circle was fitted to.
-    """
-    n = len(p)
-    origin = -plane.offset * plane.normal
-    inl = plane.inliers
-    xy = np.column_stack([p[inl] @ u, p[inl] @ v])
-    cell = 2.5 * _spacing(xy)
-    lo = xy.min(axis=0)
-    ij = np.floor((xy - lo) / cell).astype(np.int64)
-    shape = ij.max(axis=0) + 1
-    if shape.prod() > 4_000_000:
-        return None, "wall too sparse for the hole search", np.zeros(n, bool), np.zeros((0, 2))
-    occupied = np.zeros(shape, bool)
-    occupied[ij[:, 0], ij[:, 1]] = True
-    regions, count = ndimage.label(~occupied)
-    if count == 0:
-        return None, "no opening in the wall", np.zeros(n, bool), np.zeros((0, 2))
-    border = np.unique(np.concatenate([regions[0], regions[-1], regions[:, 0], regions[:, -1]]))
-    sizes = np.bincount(regions.ravel(), minlength=count + 1).astype(float)
-    sizes[0] = 0
-    sizes[border] = 0
-    area = sizes * cell * cell
-    r_area = np.sqrt(area / np.pi)
-    ok = (area > 0) & (r_area <= max_extent) & (r_area >= cell)   # >= about 3 cells across
-    if radius is not None:
-        ok &= (r_area > 0.5 * radius) & (r_area < 1.5 * radius)
-    if not ok.any():
-        return None, "no opening of the inlet's size in the wall", np.zeros(n, bool), \
-            np.zeros((0, 2))
-    best = int(np.argmax(np.where(ok, area, -1)))
-    cells = np.argwhere(regions == best)
-    rough = lo + (cells.mean(axis=0) + 0.5) * cell
-    rho = float(np.sqrt(len(cells) / np.pi) * cell)
-    # A gap in the wall can be the shadow of something standing in front of it (a pipe): the
-    # rays of such points, carried on to the wall, land in the gap.
-    h_all = p @ plane.normal + plane.offset
-    front = p[h_all > max(threshold, 4 * plane.rms)]
-    landing = front * (-plane.offset / (front @ plane.normal))[:, None]
-    xy_front = np.column_stack([landing @ u, landing @ v])
-    covering = int((np.linalg.norm(xy_front - rough, axis=1) < 2 * rho + 2 * cell).sum())
-    if covering >= 10:
-        return None, (f"the gap in the wall lies behind {covering} points standing off it "
-                      "(an object, not an opening)"), np.zeros(n, bool), np.zeros((0, 2))
 
-    sectors = 90
-
-    def innermost(points2: NDArray, outer: bool) -> tuple[NDArray, NDArray]:
-        d = points2 - rough
-        r = np.linalg.norm(d, axis=1)
-        s = np.floor((np.arctan2(d[:, 1], d[:, 0]) + np.pi) / (2 * np.pi) * sectors)
-        s = np.clip(s.astype(np.int64), 0, sectors - 1)
-        order = np.lexsort((-r if outer else r, s))
-        first = np.ones(len(order), bool)
-        first[1:] = s[order][1:] != s[order][:-1]
-        pick = order[first]
-        return s[pick], pick
-
-    wall_idx = np.flatnonzero(inl)
-    r_wall = np.linalg.norm(xy - rough, axis=1)
-    near = r_wall < rho + 4 * cell
-    sec_w, pick_w = innermost(xy[near], outer=False)
-    rim_wall = np.full((sectors, 2), np.nan)
-    rim_wall[sec_w] = xy[near][pick_w]
-    rim_mask = np.zeros(n, bool)
-    rim_mask[wall_idx[np.flatnonzero(near)[pick_w]]] = True
-
-    # Rays through the hole: returns behind the wall, carried back along their ray to the wall;
-    # where a sector has both, the edge is taken midway between the two.
-    behind = h_all < -threshold
-    # Where no ray went through, the edge lies on average half a spacing inside the innermost
-    # wall point (between it and the next sample, which fell into the hole).
-    spacing = cell / 2.5
-    radial = rim_wall - rough
-    radial /= np.maximum(np.linalg.norm(radial, axis=1, keepdims=True), 1e-12)
-    rim = rim_wall - 0.5 * spacing * radial
-    if behind.sum() >= 3:
-        q = p[behind]
-        scale = -plane.offset / (q @ plane.normal)
-        cross = q * scale[:, None] - origin
-        xy_b = np.column_stack([cross @ u, cross @ v])
-        inside = np.linalg.norm(xy_b - rough, axis=1) < rho + 4 * cell
-        if inside.sum() >= 3:
-            sec_b, pick_b = innermost(xy_b[inside], outer=True)
-            through = np.full((sectors, 2), np.nan)
-            through[sec_b] = xy_b[inside][pick_b]
-            # A return behind the wall whose ray crosses it beyond the innermost wall point
-            # went through solid wall: an outlier, left out.
-            both = ~np.isnan(rim_wall[:, 0]) & ~np.isnan(through[:, 0])
-            both[both] = (np.linalg.norm(through[both] - rough, axis=1)
-                          < np.linalg.norm(rim_wall[both] - rough, axis=1))
-            rim[both] = 0.5 * (rim_wall[both] + through[both])
-    rim = rim[~np.isnan(rim[:, 0])]
-    if len(rim) < 3:
-        return None, "too few points on the hole's rim", rim_mask, rim
-    return fit_circle(rim, radius), "ok", rim_mask, rim
+def _no_target(kind: str, considered: list[Candidate], k: float, unit: str) -> str:
+    if not considered:
+        return f"no {kind} candidate"
+    best = max(considered, key=lambda c: c.size)
+    where = "cluster(s) off the wall" if kind == "pipe" else "opening(s) in the wall"
+    return (f"no {kind} among {len(considered)} {where}: the largest, "
+            f"{best.describe(k, unit)}, is not one: {best.reason}")
 
 
 def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe", "hole"] = "pipe",
                   radius: float | None = None, units: str | None = None,
                   nonfinite: Literal["drop", "refuse"] = "drop",
-                  T_base_sensor: ArrayLike | None = None, plane_threshold: float = 0.01,
+                  T_base_sensor: ArrayLike | None = None, plane_threshold: float | None = None,
                   min_height: float | None = None, eps: float | None = None,
                   min_samples: int = 5, min_cluster: int = 30, max_extent: float = 0.3,
                   choose: Literal["largest", "nearest", "highest"] = "largest",
                   voxel: float | None = None, outlier_filter: bool = False,
-                  seed: int | None = 0) -> TargetResult:
-    """Find the water inlet (a pipe or a hole in the wall) in a scan of the train's side.
+                  rings: ArrayLike | None = None, seed: int | None = 0) -> TargetResult:
+    """Find the water inlet (a pipe or a hole in the wall) in a scan of the train's side, and
+    report it only with evidence (see the module's note); "no target" otherwise.
 
     Parameters
     ----------
     cloud_or_path : array_like (N, 3) in m, a `Cloud`, or a cloud file's path
-        A file is read with `armkit.io.clouds.read_cloud` (`units` and `nonfinite` apply).
+        A file is read with `armkit.io.clouds.read_cloud` (`units` and `nonfinite` apply); a
+        cloud's ``ring`` field, if it has one, gives the rows.
     kind : {"pipe", "hole"}
     radius : float or None
         The inlet's known radius (m), or None to fit it.
@@ -465,29 +396,33 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
         For a file: drop points with NaN or inf (and count them) or refuse the file.
     T_base_sensor : array_like (4, 4) or None
         The sensor's pose in the robot's base frame (m); gives `T_base_target`.
-    plane_threshold : float
-        Inlier distance of the wall, m.
+    plane_threshold : float or None
+        Half-width of the wall's band (m); default: 3.5 robust standard deviations of the
+        wall's own residuals (`armkit.perception.scan`).
     min_height : float or None
-        Candidates stand at least this far off the wall (m); default max(plane_threshold,
-        4 x the wall's RMS).
+        Candidates stand at least this far off the wall (m); default the band, and at least
+        4 robust standard deviations of the wall.
     eps : float or None
-        DBSCAN radius (m); default 4 x the wall's point spacing, at least 5 mm.
+        DBSCAN radius (m); default 4 point spacings, 1.5 ring gaps, at least 5 mm.
     min_samples : int
         DBSCAN core size.
     min_cluster : int
         Smallest target cluster (points).
     max_extent : float
-        Largest distance (m) of a cluster's point from its centroid along the wall, when the
-        radius is not known (else 3 radii).
+        Largest distance (m) of a cluster's point from its centroid along the wall, and the
+        largest radius, when the radius is not known (else 3 radii).
     choose : {"largest", "nearest", "highest"}
-        The rule that picks the target among plausible clusters (module docstring).
+        The rule that picks the target among the candidates that pass (module docstring).
     voxel : float or None
-        Voxel down-sampling edge (m), None for none.
+        Voxel down-sampling edge (m), None for none (rows are then inferred again).
     outlier_filter : bool
         Remove statistical outliers among the candidates (k = 8, 2 standard deviations) before
         clustering. Off by default: DBSCAN leaves isolated points out already, and the filter
         judges by the candidates' mean density, so a dense object beside the inlet can make
         the inlet's own points look like outliers.
+    rings : array_like (N,) of int, optional
+        Each point's ring (row) for points given as an array; default: a cloud's ``ring``
+        field, else rows inferred from the elevations.
     seed : int or None
         RANSAC's seed.
 
@@ -509,8 +444,10 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
         cloud_or_path = read_cloud(cloud_or_path, units=units, nonfinite=nonfinite)
     if isinstance(cloud_or_path, Cloud):
         info.update(dropped=cloud_or_path.dropped, source=cloud_or_path.path,
-                    units=cloud_or_path.units)
+                    file_units=cloud_or_path.file_units)
         p = cloud_or_path.points
+        if rings is None and "ring" in cloud_or_path.fields:
+            rings = cloud_or_path.fields["ring"]
     else:
         p = points_array(cloud_or_path)
         check_scale(p, "points", file=False)
@@ -521,42 +458,69 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
     for name, value in (("radius", radius), ("min_height", min_height), ("eps", eps),
                         ("voxel", voxel), ("plane_threshold", plane_threshold),
                         ("max_extent", max_extent)):
-        if value is not None and not (np.isfinite(value) and value > 0):
-            raise InputError(f"{name}: expected a positive length in m, found {value}")
+        if value is not None and not (np.isfinite(value) and 0 < value <= 1e3):
+            raise InputError(f"{name}: expected a positive length of at most 1000 m, "
+                             f"found {value}")
+    if not (isinstance(min_cluster, (int, np.integer)) and 3 <= min_cluster <= 10**7):
+        raise InputError(f"min_cluster: expected a whole number from 3 to 1e7, found "
+                         f"{min_cluster!r}")
+    if rings is not None:
+        rings = np.asarray(rings)
+        if rings.shape != (len(p),) or not np.issubdtype(rings.dtype, np.integer):
+            raise InputError(f"rings: expected {len(p)} whole numbers (one per point), found "
+                             f"{rings.dtype} of shape {rings.shape}")
     if T_base_sensor is not None:
         T_base_sensor = as_transform(T_base_sensor, "T_base_sensor")
         if T_base_sensor.shape != (4, 4):
             raise InputError(f"T_base_sensor: expected shape (4, 4), found {T_base_sensor.shape}")
     info["T_base_sensor"] = T_base_sensor
     if voxel is not None:
-        p = voxel_downsample(p, voxel)
+        p, rings = voxel_downsample(p, voxel), None
     n = len(p)
+    k_file = 1e3 if info.get("file_units", "m") == "mm" else 1.0
+    unit = info.get("file_units", "m")
 
-    plane = ransac_plane(p, plane_threshold, refits=1, seed=seed)
-    if plane.inliers.sum() < max(50, 0.05 * n):
-        return _fail(f"no wall: the best plane holds {int(plane.inliers.sum())} of {n} points",
-                     kind, radius, p, None, info)
+    scan = measure_scan(p, rings, plane_threshold, seed, labels=kind == "hole")
+    if scan is None or scan.plane.inliers.sum() < max(50, 0.05 * n):
+        held = 0 if scan is None else int(scan.plane.inliers.sum())
+        return _fail(f"no wall: the best plane holds {held} of {n} points", kind, radius, p,
+                     None, info)
+    info["scan"] = scan
+    if plane_threshold is None and BAND_SIGMAS * scan.wall_sigma > START_BAND:
+        return _fail(f"no wall: the best plane's {int(scan.plane.inliers.sum())} points spread "
+                     f"evenly through its band of +-{START_BAND * 1e3:.0f} mm (a wall's points "
+                     f"crowd near its plane; this is noise of "
+                     f"{scan.wall_sigma * 1e3:.0f} mm or more, or no plane)", kind, radius, p,
+                     None, info)
+    plane = scan.plane
     u, v = _plane_basis(plane.normal)
     origin = -plane.offset * plane.normal            # the sensor's foot on the wall
     # (n, 2) coordinates along the wall. Two matrix-vector products, not one (n, 3) @ (3, 2)
     # product: OpenBLAS runs that one threaded, and on a busy machine its threads wait for a
     # core (measured: 0.2 ms alone, 120 ms median under load).
     xy_all = np.column_stack([p @ u, p @ v])
-    spacing = _spacing(np.compress(plane.inliers, xy_all, axis=0))
     extent = 3 * radius if radius is not None else max_extent
 
     if kind == "hole":
-        circle, why, rim_mask, _ = _hole(p, plane, u, v, radius, plane_threshold, extent)
-        info.update(cluster_mask=rim_mask)
-        if circle is None:
-            return _fail(why, kind, radius, p, plane, info)
+        find = row_openings if scan.ring_count else grid_openings
+        openings = find(p, scan, u, v, radius, extent)
+        considered = [_hole_candidate(o, origin, u, v) for o in openings]
+        info["considered"] = considered
+        passed = _ranked([c for c in considered if c.passed], choose)
+        if not passed:
+            return _fail(_no_target("hole", considered, k_file, unit), kind, radius, p, plane,
+                         info)
+        chosen = openings[next(i for i, c in enumerate(considered) if c is passed[0])]
+        circle = chosen.circle
+        info.update(cluster_mask=chosen.rim_mask)
         centre = origin + circle.centre[0] * u + circle.centre[1] * v
         T = target_frame(plane.normal, centre)
-        centroid = p[rim_mask].mean(axis=0)
-        size, cand_mask, n_clusters = int(rim_mask.sum()), np.zeros(n, bool), 0
+        centroid = p[chosen.rim_mask].mean(axis=0) if chosen.rim_mask.any() else centre
+        size, cand_mask, n_clusters = len(chosen.rim), np.zeros(n, bool), len(openings)
+        fit_points, fit_rms = len(chosen.rim), circle.rms
     else:
         h = p @ plane.normal + plane.offset
-        floor = min_height if min_height is not None else max(plane_threshold, 4 * plane.rms)
+        floor = min_height if min_height is not None else max(scan.band, 4 * scan.wall_sigma)
         cand_mask = h > floor
         info["candidate_mask"] = cand_mask
         if cand_mask.sum() < min_cluster:
@@ -571,67 +535,102 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
             cand_mask[cand_idx] = True
             info["candidate_mask"] = cand_mask
         info["candidates"] = len(cand_idx)
-        cand = p[cand_idx]
-        radius_eps = eps if eps is not None else max(4 * spacing, 0.005)
-        labels = dbscan(cand, radius_eps, min_samples)
+        radius_eps = eps if eps is not None else scan.eps
+        info["eps"] = radius_eps
+        labels = dbscan(p[cand_idx], radius_eps, min_samples)
         info["clusters"] = int(labels.max() + 1)
-        label, why = _choose(labels, xy_all[cand_idx], h[cand_idx], cand, min_cluster, extent,
-                             choose)
-        if label is None:
-            return _fail(why, kind, radius, p, plane, info)
-        members = cand_idx[labels == label]
+        sizes = np.bincount(labels[labels >= 0], minlength=max(info["clusters"], 0))
+        big = [int(c) for c in np.argsort(-sizes, kind="stable")[:MAX_CLUSTERS]
+               if sizes[c] >= min_cluster]
+        if not big:
+            return _fail(f"no cluster of at least {min_cluster} points off the wall (largest: "
+                         f"{int(sizes.max()) if len(sizes) else 0})", kind, radius, p, plane,
+                         info)
+        considered, circles, members_of = [], [], []
+        for c in big:                              # clusters: a handful, not points
+            members = cand_idx[labels == c]
+            spread = np.linalg.norm(xy_all[members] - xy_all[members].mean(axis=0),
+                                    axis=1).max()
+            if spread > extent:
+                centre = p[members].mean(axis=0)
+                considered.append(Candidate(
+                    "pipe", len(members), np.full(3, np.nan), centre, float("nan"),
+                    float("nan"), float("nan"), 0.0,
+                    float(np.percentile(h[members], 99)), float(np.linalg.norm(centre)),
+                    f"it reaches {spread * 1e3:.0f} mm from its centre along the wall, more "
+                    f"than {extent * 1e3:.0f} mm (larger than the inlet)"))
+                circles.append(None)
+            else:
+                candidate, circle = _weigh_pipe(p[members], xy_all[members], h[members],
+                                                plane.normal, scan, radius, extent, origin, u, v)
+                considered.append(candidate)
+                circles.append(circle)
+            members_of.append(members)
+        info["considered"] = considered
+        passed = _ranked([c for c in considered if c.passed], choose)
+        if not passed:
+            return _fail(_no_target("pipe", considered, k_file, unit), kind, radius, p, plane,
+                         info)
+        index = next(i for i, c in enumerate(considered) if c is passed[0])
+        members = members_of[index]
         cluster_mask = np.zeros(n, bool)
         cluster_mask[members] = True
         info["cluster_mask"] = cluster_mask
-
-        # Fit, refit the wall without the inlet's surroundings, fit again in the new plane.
-        circle = fit_circle(xy_all[members], radius)
-        du, dv = xy_all[:, 0] - circle.centre[0], xy_all[:, 1] - circle.centre[1]
-        keep = plane.inliers & (du * du + dv * dv > (circle.radius + 2 * radius_eps) ** 2)
-        if keep.sum() >= 3:
-            normal, offset, _ = fit_plane_lsq(np.compress(keep, p, axis=0))
-            h = p @ normal + offset
-            inliers = np.abs(h) < plane_threshold
-            hin = h[inliers]
-            plane = Plane(normal, offset, inliers, float(np.sqrt(np.mean(hin * hin))),
-                          plane.iterations)
-            u, v = _plane_basis(plane.normal)
-            origin = -plane.offset * plane.normal
-            q = p[members] - origin
-            circle = fit_circle(np.column_stack([q @ u, q @ v]), radius)
-        # Only the side of the pipe facing the sensor is seen, so the centre lies farther
-        # from the sensor's foot on the wall (0, 0) than the seen arc does. On a short arc a
-        # known radius also fits the mirror image: then start again from the other side.
-        arc = np.column_stack([(p[members] - origin) @ u, (p[members] - origin) @ v])
-        middle = arc[circle.used].mean(axis=0)
-        if np.linalg.norm(circle.centre) < np.linalg.norm(middle):
-            mirrored = fit_circle(arc, radius, start=2 * middle - circle.centre)
-            if np.linalg.norm(mirrored.centre) < np.linalg.norm(arc[mirrored.used].mean(axis=0)):
-                return _fail("the fitted circle lies on the sensor's side of the points it was "
-                             "fitted to, from either side (not a pipe seen from the side?)",
-                             kind, radius, p, plane, info)
-            circle = mirrored
-        if circle.coverage < MIN_ARC:
-            return _fail(f"the points span {np.degrees(circle.coverage):.0f} deg of the circle, "
-                         f"fewer than {np.degrees(MIN_ARC):.0f}: too short an arc to fit "
-                         "(a smaller eps may split the cluster; a larger one may join it)",
-                         kind, radius, p, plane, info)
-        if not (np.isfinite(circle.radius) and 0 < circle.radius <= extent):
-            return _fail(f"circle fit failed: radius {circle.radius * 1e3:.1f} mm is not "
-                         f"within 0 .. {extent * 1e3:.0f} mm", kind, radius, p, plane, info)
-        h_members = h[members] if keep.sum() >= 3 else p[members] @ plane.normal + plane.offset
+        plane, circle, h_members, origin, u, v = _refit(p, members, plane, circles[index],
+                                                        radius, radius_eps, scan, xy_all)
         mouth = float(np.percentile(h_members[circle.used], 99))
         centre = (origin + circle.centre[0] * u + circle.centre[1] * v + mouth * plane.normal)
         T = target_frame(plane.normal, centre)
         centroid = p[members].mean(axis=0)
         size, n_clusters = len(members), info["clusters"]
+        fit_points, fit_rms = int(circle.used.sum()), circle.rms
     T_base = None if T_base_sensor is None else T_base_sensor @ T
     return TargetResult(
         success=True, reason="ok", kind=kind, T_sensor_target=T, T_base_target=T_base,
         radius=float(circle.radius), radius_known=radius is not None, plane=plane,
         plane_inliers=int(plane.inliers.sum()), plane_rms=plane.rms,
         candidates=int(cand_mask.sum()), clusters=n_clusters, cluster_size=size,
-        fit_points=int(circle.used.sum()), fit_rms=circle.rms, coverage=circle.coverage,
+        fit_points=fit_points, fit_rms=fit_rms, coverage=circle.coverage,
         centroid=centroid, points=p, cluster_mask=info.get("cluster_mask"),
         candidate_mask=cand_mask, dropped=int(info.get("dropped", 0)),
-        source=info.get("source"), units=info.get("units", "m"))
+        source=info.get("source"), file_units=unit, range_noise=scan.range_noise,
+        plane_band=scan.band, eps=info.get("eps", float("nan")), rows=scan.ring_count,
+        rule=_rule_text(kind, choose, passed, k_file, unit), considered=tuple(considered),
+        runner_up=passed[1] if len(passed) > 1 else None)
+
+
+def _hole_candidate(opening: Opening, origin: NDArray, u: NDArray, v: NDArray) -> Candidate:
+    c = opening.circle
+    rim = opening.rim.mean(axis=0) if len(opening.rim) else np.full(2, np.nan)
+    centroid = origin + rim[0] * u + rim[1] * v
+    if c is None:
+        return Candidate("hole", len(opening.rim), np.full(3, np.nan), centroid, float("nan"),
+                         float("nan"), opening.rms_limit, 0.0, 0.0, float("nan"),
+                         opening.reason)
+    centre = origin + c.centre[0] * u + c.centre[1] * v
+    return Candidate("hole", len(opening.rim), centre, centroid, float(c.radius), c.rms,
+                     opening.rms_limit, c.coverage, 0.0, float(np.linalg.norm(centre)),
+                     opening.reason)
+
+
+def _refit(p, members, plane, circle, radius, radius_eps, scan, xy_all):
+    """Refit the wall without the inlet's surroundings, then the circle in the new plane."""
+    du, dv = xy_all[:, 0] - circle.centre[0], xy_all[:, 1] - circle.centre[1]
+    keep = plane.inliers & (du * du + dv * dv > (circle.radius + 2 * radius_eps) ** 2)
+    u, v = _plane_basis(plane.normal)
+    origin = -plane.offset * plane.normal
+    if keep.sum() >= 3:
+        normal, offset, _ = fit_plane_lsq(np.compress(keep, p, axis=0))
+        h = p @ normal + offset
+        inliers = np.abs(h) < scan.band
+        hin = h[inliers]
+        plane = Plane(normal, offset, inliers, float(np.sqrt(np.mean(hin * hin))),
+                      plane.iterations)
+        u, v = _plane_basis(plane.normal)
+        origin = -plane.offset * plane.normal
+        q = p[members] - origin
+        refitted, why = _pipe_circle(np.column_stack([q @ u, q @ v]), radius)
+        if why == "ok":
+            circle = refitted
+    h_members = p[members] @ plane.normal + plane.offset
+    return plane, circle, h_members, origin, u, v

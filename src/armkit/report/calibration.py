@@ -15,6 +15,13 @@ from armkit.model.robot import Units
 _AXIS_COLORS = ("tab:red", "tab:green", "tab:blue")
 
 
+def plain(text: str) -> str:
+    """Text from a file (a robot's name) as a figure shows it: as written. Matplotlib reads
+    text between two dollar signs as math markup (and fails on a name such as
+    ``ws$\\frac{$``); escaped dollars are drawn as dollars."""
+    return str(text).replace("$", r"\$")
+
+
 def accuracy_figure(report: AccuracyReport, units: Units) -> Figure:
     """Left: each point's error along x, y and z with the per-axis bias; right: each point's
     error length with its mean, rms and the tolerance (when one was given)."""
@@ -69,7 +76,7 @@ def calibration_figure(result: CalibrationResult, units: Units) -> Figure:
         ax.plot(h, length(result.holdout_after), "s", color="tab:orange", mfc="none",
                 label="hold-out, identified")
     ax.set(xlabel="measurement", ylabel=f"position error ({unit})", yscale="log",
-           title=f"{result.robot.name}: kinematic calibration")
+           title=f"{plain(result.robot.name)}: kinematic calibration")
     ax.legend(fontsize=8)
     return fig
 

@@ -3,6 +3,7 @@ side view of the heights above the wall. Lengths in the cloud file's units."""
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ from matplotlib.patches import Circle as CirclePatch
 from matplotlib.patches import Rectangle
 
 from armkit.perception.synthetic import target_frame
+from armkit.report.calibration import plain
 from armkit.perception.target import TargetResult
 
 SHOWN = 30_000          # points drawn at most per layer (the rest adds ink, not information)
@@ -35,7 +37,7 @@ def detection_figure(result: TargetResult) -> Figure:
     -------
     Figure
     """
-    unit = result.units
+    unit = result.file_units
     k = _SCALE.get(unit, 1.0)
     p = result.points
     fig = Figure(figsize=(17, 5.4), layout="constrained")
@@ -49,7 +51,7 @@ def detection_figure(result: TargetResult) -> Figure:
         axes[0].legend(loc="upper right")
         for ax in axes[1:]:
             ax.set_axis_off()
-        fig.suptitle(f"no target: {result.reason}")
+        fig.suptitle(plain(textwrap.fill(f"no target: {result.reason}", 160)))
         return fig
     T_wall = target_frame(plane.normal, -plane.offset * plane.normal)
     u, v, n = T_wall[:3, 0], T_wall[:3, 1], T_wall[:3, 2]
@@ -125,7 +127,7 @@ def detection_figure(result: TargetResult) -> Figure:
     ax.legend(loc="upper right", fontsize=7)
     title = (f"{result.kind} found: centre ({', '.join(f'{x:.4g}' for x in result.centre * k)}) "
              f"{unit} in the sensor frame" if ok else f"no target: {result.reason}")
-    fig.suptitle(title)
+    fig.suptitle(plain(textwrap.fill(title, 160)))
     return fig
 
 
