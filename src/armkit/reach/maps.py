@@ -682,7 +682,7 @@ def settings_key(plan: _Plan) -> str:
     orientations, solver settings and the collision model."""
     arrays = [plan.voxels, plan.orientations.rotations, plan.orientations.mask]
     if plan.scene is not None:
-        arrays += list(_tools(plan).checker.model)
+        arrays += list(_tools(plan).checker.arrays)       # chain, arm parts and scene
     return _digest(arrays, (robot_key(plan.robot), plan.resolution, plan.orientations.frame,
                             plan.method, plan.restarts, plan.seed, plan.chunk,
                             plan.scene is not None, plan.collision_resolution))

@@ -87,30 +87,23 @@ def map_view(m: ReachMap, q=None, *, title: str = ""):
     """
     import plotly.graph_objects as go
 
-    from armkit.report.view import robot_view
+    from armkit.report.view import show
 
     robot = m.robot
     if q is None:
         low, high = robot.sampling_limits
         q = 0.5 * (low + high)
-    fig = robot_view(robot, q, title=title or f"{robot.name}: reachability map")
-    scale = 1000.0 if robot.units.length == "mm" else 1.0
     rows = np.flatnonzero(m.count > 0)
     if len(rows) > MOST_POINTS:             # every k-th voxel, evenly over the map
         rows = rows[np.linspace(0, len(rows) - 1, MOST_POINTS).astype(int)]
-    p = m.centers[rows] * scale
+    fig = show(robot, q, title=title or f"{robot.name}: reachability map",
+               also=m.centers[rows])
+    p = m.centers[rows] * (1000.0 if robot.units.length == "mm" else 1.0)
     fig.add_trace(go.Scatter3d(
         x=p[:, 0], y=p[:, 1], z=p[:, 2], mode="markers", name="reachable voxels",
         marker=dict(size=2.5, color=m.index[rows], colorscale="Viridis", cmin=0.0, cmax=1.0,
                     opacity=0.5, colorbar=dict(title="index", x=1.0)),
         hovertemplate="index %{marker.color:.2f}<extra></extra>"))
-    span = np.vstack([p, [[0, 0, 0]]])
-    lo, hi = span.min(axis=0), span.max(axis=0)
-    centre, half = (lo + hi) / 2, max((hi - lo).max() / 2, 1e-3 * scale) * 1.05
-    unit = robot.units.length
-    fig.update_layout(scene={f"{c}axis": dict(title=f"{c} ({unit})",
-                                              range=[centre[i] - half, centre[i] + half])
-                             for i, c in enumerate("xyz")} | {"aspectmode": "cube"})
     return fig
 
 
@@ -202,13 +195,13 @@ def save_map_figures(m: ReachMap, out: str | Path, height: float | None = None,
                      dpi: int = 90) -> list[Path]:
     """Write ``<robot>_reach.png`` (sections) and ``<robot>_reach.html`` (the 3-D view, which
     opens offline) into the folder `out`; returns their paths."""
-    from armkit.report.view import write_view
+    from armkit.report.view import write_figure
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / f"{m.robot.name}_reach.png", out / f"{m.robot.name}_reach.html"]
     map_figure(m, height, azimuth, units).savefig(paths[0], dpi=dpi)
-    write_view(map_view(m), paths[1])
+    write_figure(map_view(m), paths[1])
     return paths
 
 

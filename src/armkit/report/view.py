@@ -521,3 +521,10 @@ def write_page(text: str, path: str | Path) -> Path:
     path = Path(path)
     path.write_text(text, encoding="utf-8")
     return path
+
+
+def write_figure(fig: go.Figure, path: str | Path) -> Path:
+    """Write a plotly figure as one HTML page that opens offline (plotly's script inside)."""
+    path = Path(path)
+    fig.write_html(path, include_plotlyjs=True, full_html=True, auto_play=False)
+    return path
