@@ -19,42 +19,7 @@ from typing import TYPE_CHECKING
 from armkit.errors import ArmkitError, DriveError, InputError, ModelFileError
 from armkit.lazy import lazy_names
 
-# name -> the module that defines it
-_HOMES = {
-    **dict.fromkeys(("fk", "fk_frames"), "armkit.kinematics.forward"),
-    **dict.fromkeys(("jacobian", "jacobian_analytic", "jacobian_dot", "tool_velocity",
-                     "tool_acceleration", "singular_values", "manipulability",
-                     "min_singular_value", "condition_number"), "armkit.kinematics.jacobian"),
-    **dict.fromkeys(("ik", "ik_solutions", "IKResult", "IKSolutions", "IKSolver", "IKTrack"),
-                    "armkit.kinematics.ik"),
-    **dict.fromkeys(("load_robot", "robot", "robots", "save_robot"), "armkit.io.robot_files"),
-    "Robot": "armkit.model.robot",
-    **dict.fromkeys(("Trajectory", "cubic", "quintic", "jerk_limited", "trapezoidal", "retime",
-                     "retime_jerk", "spline", "tool_motion", "RetimeResult"),
-                    "armkit.trajectory"),
-    **dict.fromkeys(("Section", "Workspace", "workspace"), "armkit.sampled_workspace"),
-    **dict.fromkeys(("set_num_threads", "get_num_threads"), "armkit.threads"),
-    "warm_up": "armkit.warmup",
-    **dict.fromkeys(("check_waypoints", "send_waypoints", "DriveClient", "SimDrive"),
-                    "armkit.drives"),
-    "load_register_map": "armkit.io.register_maps",
-    **dict.fromkeys(("handeye", "HandEyeResult", "calibrate", "CalibrationResult",
-                     "select_poses", "accuracy_report", "AccuracyReport", "CameraMount",
-                     "points_to_base", "poses_to_base"), "armkit.calibration"),
-    "read_camera_mount": "armkit.io.camera",
-    **dict.fromkeys(("detect_target", "TargetResult"), "armkit.perception"),
-    **dict.fromkeys(("plan", "PlanResult", "Scene"), "armkit.planning"),
-    **dict.fromkeys(("inverse_dynamics", "gravity_torques", "mass_matrix", "coriolis",
-                     "coriolis_matrix", "forward_dynamics", "with_payload", "torque_profile",
-                     "TorqueLimits"), "armkit.dynamics"),
-    **dict.fromkeys(("reach_map", "ReachMap", "Orientations", "base_placement", "Placement"),
-                    "armkit.reach"),
-    **dict.fromkeys(("load_task", "demo_task", "Task"), "armkit.io.tasks"),
-    **dict.fromkeys(("run_job", "JobResult"), "armkit.job"),
-    "show": "armkit.report.view",
-}
-
-if TYPE_CHECKING:       # what the names are, for readers and type checkers
+if TYPE_CHECKING:       # the public names, each loaded at its first use (armkit.lazy)
     from armkit.calibration import (AccuracyReport, CalibrationResult, CameraMount,
                                     HandEyeResult, accuracy_report, calibrate, handeye,
                                     points_to_base, poses_to_base, select_poses)
@@ -84,9 +49,8 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.warmup import warm_up
 
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
 
 __version__ = "0.1.0"
 
-__all__ = ["ArmkitError", "InputError", "ModelFileError", "DriveError", *_HOMES]

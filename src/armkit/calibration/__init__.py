@@ -15,15 +15,9 @@ from armkit.calibration.frames import (CameraMount, camera_mount, camera_to_base
 from armkit.calibration.handeye import HandEyeResult, handeye
 from armkit.lazy import lazy_names
 
-_HOMES = dict.fromkeys(("CalibrationResult", "Identifiability", "calibrate", "identifiability",
-                        "parametric_model", "select_poses"), "armkit.calibration.identify")
-
 if TYPE_CHECKING:
     from armkit.calibration.identify import (CalibrationResult, Identifiability, calibrate,
                                              identifiability, parametric_model, select_poses)
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
-__all__ = ["AccuracyReport", "accuracy_report", "CameraMount", "camera_mount", "camera_to_base",
-           "point_covariance_in_base", "points_to_base", "poses_to_base", "HandEyeResult",
-           "handeye", *_HOMES]

@@ -12,20 +12,11 @@ from typing import TYPE_CHECKING
 
 from armkit.lazy import lazy_names
 
-_HOMES = {
-    **dict.fromkeys(("DriveClient", "DriveStatus", "SendResult", "check_waypoints",
-                     "send_waypoints"), "armkit.drives.modbus"),
-    **dict.fromkeys(("JointRegister", "RegisterMap", "default_register_map"),
-                    "armkit.drives.registers"),
-    **dict.fromkeys(("FAULTS", "SimDrive"), "armkit.drives.simdrive"),
-}
-
 if TYPE_CHECKING:
     from armkit.drives.modbus import (DriveClient, DriveStatus, SendResult, check_waypoints,
                                       send_waypoints)
     from armkit.drives.registers import JointRegister, RegisterMap, default_register_map
     from armkit.drives.simdrive import FAULTS, SimDrive
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
-__all__ = list(_HOMES)

@@ -18,15 +18,6 @@ from typing import TYPE_CHECKING
 
 from armkit.lazy import lazy_names
 
-_HOMES = {
-    **dict.fromkeys(("inverse_dynamics", "gravity_torques", "coriolis", "mass_matrix",
-                     "coriolis_matrix", "forward_dynamics", "with_payload"),
-                    "armkit.dynamics.equations"),
-    **dict.fromkeys(("torque_profile", "TorqueProfile", "TorqueLimits"),
-                    "armkit.dynamics.torques"),
-    **dict.fromkeys(("Inertia", "InertialModel"), "armkit.model.inertia"),
-}
-
 if TYPE_CHECKING:
     from armkit.dynamics.equations import (coriolis, coriolis_matrix, forward_dynamics,
                                            gravity_torques, inverse_dynamics, mass_matrix,
@@ -35,7 +26,6 @@ if TYPE_CHECKING:
     from armkit.model.inertia import Inertia, InertialModel
 
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
 
-__all__ = list(_HOMES)

@@ -23,17 +23,10 @@ from typing import TYPE_CHECKING
 
 from armkit.lazy import lazy_names
 
-_HOMES = {
-    **dict.fromkeys(("JobResult", "STEPS", "run_job"), "armkit.job.run"),
-    **dict.fromkeys(("Arrival", "ArmState", "FinalCheck", "IKChoice", "Motion", "MotionChecks",
-                     "Sent", "TargetStep"), "armkit.job.steps"),
-}
-
 if TYPE_CHECKING:
     from armkit.job.run import STEPS, JobResult, run_job
     from armkit.job.steps import (ArmState, Arrival, FinalCheck, IKChoice, Motion,
                                   MotionChecks, Sent, TargetStep)
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
-__all__ = list(_HOMES)

@@ -11,16 +11,7 @@ from typing import TYPE_CHECKING
 
 from armkit.lazy import lazy_names
 
-# name -> the module that defines it
-_HOMES = {
-    **dict.fromkeys(("Chain", "Joint", "KernelChain", "Limits"), "armkit.model.chain"),
-    **dict.fromkeys(("DHRow", "DHTable", "chain_from_dh"), "armkit.model.dh"),
-    **dict.fromkeys(("ScrewRow", "ScrewTable", "chain_from_poe"), "armkit.model.poe"),
-    **dict.fromkeys(("SI", "Robot", "Units", "joint_array"), "armkit.model.robot"),
-    **dict.fromkeys(("URDFCollision", "URDFTable", "chain_from_urdf"), "armkit.model.urdf"),
-}
-
-if TYPE_CHECKING:       # what the names are, for readers and type checkers
+if TYPE_CHECKING:       # the public names, each loaded at its first use (armkit.lazy)
     from armkit.model.chain import Chain, Joint, KernelChain, Limits
     from armkit.model.dh import DHRow, DHTable, chain_from_dh
     from armkit.model.poe import ScrewRow, ScrewTable, chain_from_poe
@@ -28,7 +19,6 @@ if TYPE_CHECKING:       # what the names are, for readers and type checkers
     from armkit.model.urdf import URDFCollision, URDFTable, chain_from_urdf
 
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
 
-__all__ = list(_HOMES)

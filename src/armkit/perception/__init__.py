@@ -15,20 +15,6 @@ from typing import TYPE_CHECKING
 
 from armkit.lazy import lazy_names
 
-_HOMES = {
-    **dict.fromkeys(("dbscan", "euclidean_clusters"), "armkit.perception.clusters"),
-    **dict.fromkeys(("remove_statistical_outliers", "statistical_outliers", "voxel_downsample"),
-                    "armkit.perception.filters"),
-    **dict.fromkeys(("Plane", "fit_plane_lsq", "ransac_plane"), "armkit.perception.plane"),
-    **dict.fromkeys(("CLUTTER", "Clutter", "SyntheticScene", "cluttered_scene", "clutter_object",
-                     "random_scene", "synthetic_scene", "target_frame"),
-                    "armkit.perception.synthetic"),
-    **dict.fromkeys(("Circle", "fit_circle"), "armkit.perception.circles"),
-    **dict.fromkeys(("Candidate", "TargetResult", "detect_target"), "armkit.perception.target"),
-    **dict.fromkeys(("Scan", "measure_scan"), "armkit.perception.scan"),
-    **dict.fromkeys(("Opening", "row_openings", "grid_openings"), "armkit.perception.holes"),
-}
-
 if TYPE_CHECKING:
     from armkit.perception.clusters import dbscan, euclidean_clusters
     from armkit.perception.filters import (remove_statistical_outliers, statistical_outliers,
@@ -42,6 +28,5 @@ if TYPE_CHECKING:
                                              target_frame)
     from armkit.perception.target import Candidate, TargetResult, detect_target
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
-__all__ = list(_HOMES)

@@ -25,20 +25,6 @@ from typing import TYPE_CHECKING
 
 from armkit.lazy import lazy_names
 
-_HOMES = {
-    **dict.fromkeys(("CartesianPath", "cartesian_line"), "armkit.trajectory.cartesian"),
-    **dict.fromkeys(("Jumps", "Stats", "compare", "knot_jumps", "peaks", "squared_jerk",
-                     "stats"), "armkit.trajectory.metrics"),
-    **dict.fromkeys(("Samples", "Trajectory"), "armkit.trajectory.piecewise"),
-    **dict.fromkeys(("cubic", "quintic"), "armkit.trajectory.polynomial"),
-    **dict.fromkeys(("Profile", "jerk_limited", "jerk_limited_profile", "profile_trajectory",
-                     "trapezoidal", "trapezoidal_profile"), "armkit.trajectory.profiles"),
-    **dict.fromkeys(("retime", "waypoint_path", "RetimeResult"), "armkit.trajectory.retiming"),
-    "retime_jerk": "armkit.trajectory.jerk_retiming",
-    **dict.fromkeys(("PAPER_PATTERNS", "patterns", "spline"), "armkit.trajectory.splines"),
-    **dict.fromkeys(("ToolMotion", "tool_motion"), "armkit.trajectory.tool"),
-}
-
 if TYPE_CHECKING:
     from armkit.trajectory.cartesian import CartesianPath, cartesian_line
     from armkit.trajectory.metrics import (Jumps, Stats, compare, knot_jumps, peaks,
@@ -54,9 +40,8 @@ if TYPE_CHECKING:
     from armkit.trajectory.tool import ToolMotion, tool_motion
 
 
-__getattr__, __dir__ = lazy_names(__name__, _HOMES)
+__getattr__, __dir__, __all__ = lazy_names(__name__)
 
 
-__all__ = list(_HOMES)
 
 
