@@ -42,8 +42,13 @@ def warm_up_steps(capabilities: Iterable[str] = CAPABILITIES) -> list[WarmUpStep
     InputError
         If a capability is not one of `CAPABILITIES`.
     """
-    import armkit
+    from armkit.io.robot_files import robot as built_in
+    from armkit.kinematics.forward import fk, fk_frames
+    from armkit.kinematics.ik import IKSolver
+    from armkit.kinematics.jacobian import jacobian
     from armkit.planning import Box, CollisionChecker, Scene, plan
+    from armkit.sampled_workspace import workspace
+    from armkit.trajectory import jerk_limited, quintic, retime, spline, trapezoidal
 
     chosen = tuple(capabilities)
     unknown = [c for c in chosen if c not in CAPABILITIES]
@@ -58,16 +63,16 @@ def warm_up_steps(capabilities: Iterable[str] = CAPABILITIES) -> list[WarmUpStep
             steps.append(WarmUpStep(capability, name, run))
 
     for name in ROBOTS:
-        robot = armkit.robot(name)
+        robot = built_in(name)
         Q = rng.uniform(*robot.chain.sampling_limits, (20_000, robot.n))
         q = Q[0]
-        T = armkit.fk(robot, Q[:64])
-        solver = armkit.IKSolver(robot)
+        T = fk(robot, Q[:64])
+        solver = IKSolver(robot)
         add("kinematics", f"{name}: one pose, frames and Jacobian",
-            lambda robot=robot, q=q: (armkit.fk(robot, q), armkit.fk_frames(robot, q),
-                                      armkit.jacobian(robot, q)))
+            lambda robot=robot, q=q: (fk(robot, q), fk_frames(robot, q),
+                                      jacobian(robot, q)))
         add("kinematics", f"{name}: a batch of poses and Jacobians",
-            lambda robot=robot, Q=Q: (armkit.fk(robot, Q), armkit.jacobian(robot, Q)))
+            lambda robot=robot, Q=Q: (fk(robot, Q), jacobian(robot, Q)))
         add("ik", f"{name}: one target, from a start and alone",
             lambda solver=solver, T=T, q=Q[1]: (solver.solve(T[0], q), solver.solve(T[1])))
         add("ik", f"{name}: a batch of targets",
@@ -75,24 +80,24 @@ def warm_up_steps(capabilities: Iterable[str] = CAPABILITIES) -> list[WarmUpStep
         if solver.family is not None:
             add("ik", f"{name}: every closed-form solution",
                 lambda solver=solver, T=T: (solver.solutions(T[0]), solver.solutions(T)))
-    ur5 = armkit.robot("ur5")
+    ur5 = built_in("ur5")
     q0, q1 = np.zeros(6), np.full(6, 0.5)
     vmax, amax = np.full(6, 1.0), np.full(6, 2.0)
     waypoints = rng.uniform(-1.0, 1.0, (8, 6))
     add("trajectory", "point to point profiles",
-        lambda: (armkit.jerk_limited(q0, q1, vmax, amax, 10 * amax).sample(
+        lambda: (jerk_limited(q0, q1, vmax, amax, 10 * amax).sample(
                      np.linspace(0.0, 1.0, 100)),
-                 armkit.trapezoidal(q0, q1, vmax, amax), armkit.quintic(q0, q1, 2.0)))
+                 trapezoidal(q0, q1, vmax, amax), quintic(q0, q1, 2.0)))
     add("trajectory", "splines and retiming",
-        lambda: (armkit.spline(np.arange(8.0), waypoints, "5-5-5-5-5-5-5").sample(
+        lambda: (spline(np.arange(8.0), waypoints, "5-5-5-5-5-5-5").sample(
                      np.linspace(0.0, 7.0, 5000)),
-                 armkit.retime(waypoints, vmax, amax)))
+                 retime(waypoints, vmax, amax)))
     shelf = Scene([Box.from_bounds([0.3, -0.5, 0.2], [0.6, 0.5, 0.24])])
     add("planning", "collision checks and a plan",
         lambda: plan(CollisionChecker(ur5, shelf), np.array([0.0, -1.0, 1.0, 0.0, 0.5, 0.0]),
                      np.array([1.0, -1.2, 1.2, 0.3, 0.5, 0.2]), seed=0, waypoints=10))
     add("workspace", "a Monte Carlo workspace",
-        lambda: armkit.workspace(ur5, 200_000, seed=0))
+        lambda: workspace(ur5, 200_000, seed=0))
     return steps
 
 

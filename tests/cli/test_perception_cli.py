@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from armkit.cli import app
-from armkit.io.clouds import write_pcd
+from armkit.io.clouds import read_cloud, write_pcd
 from armkit.calibration import camera_to_base
 from armkit.io.camera import read_camera_mount
 from armkit.perception import detect_target, synthetic_scene
@@ -33,7 +33,8 @@ def test_example_scan_json_in_millimetres_with_base_frame_and_picture(tmp_path):
                   "--out", str(tmp_path))
     assert done.returncode == 0, done.stderr
     doc = json.loads(done.stdout)
-    expected = detect_target(SCAN, radius=0.04, T_base_sensor=camera_to_base(read_camera_mount(POSE)))
+    expected = detect_target(read_cloud(SCAN), radius=0.04,
+                             T_base_sensor=camera_to_base(read_camera_mount(POSE)))
     assert doc["success"] and doc["units"] == "mm" and doc["radius"] == pytest.approx(40)
     np.testing.assert_allclose(doc["sensor"]["position"], expected.centre * 1000, atol=1e-9)
     np.testing.assert_allclose(doc["base"]["position"], expected.T_base_target[:3, 3] * 1000,

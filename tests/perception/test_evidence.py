@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from armkit.io.clouds import write_pcd
+from armkit.io.clouds import read_cloud, write_pcd
 from armkit.perception import CLUTTER, cluttered_scene, detect_target, random_scene
 
 
@@ -125,7 +125,7 @@ def test_api_and_cli_make_one_decision_on_one_file(tmp_path):
     for seed, target in ((2, "pipe"), (3, None)):
         scene = cluttered_scene(seed, target, ("box", "dome", "handle"))
         path = write_pcd(tmp_path / f"scan{seed}.pcd", scene.points, "mm")
-        api = detect_target(path)
+        api = detect_target(read_cloud(path))
         run = subprocess.run([sys.executable, "-m", "armkit", "detect", str(path), "--json"],
                              capture_output=True, text=True, timeout=120)
         cli = json.loads(run.stdout)
@@ -140,7 +140,7 @@ def test_a_pipes_dark_mouth_is_not_a_hole():
     front of that patch along the rays: only the line of sight, which passes the pipe, shows
     it is no opening."""
     scan = Path(__file__).resolve().parents[2] / "examples" / "perception" / "inlet_scan.pcd"
-    result = detect_target(scan, kind="hole")
+    result = detect_target(read_cloud(scan), kind="hole")
     assert not result.success and "line of sight" in result.reason
     for seed in range(4):
         scene = random_scene(seed, "pipe", noise=0.002, n_points=30_000)

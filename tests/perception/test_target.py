@@ -152,7 +152,6 @@ def test_no_target_is_a_result_with_a_reason():
     ("scene", {"choose": "first"}, "choose: expected one of largest, nearest, highest"),
     ("scene", {"radius": -0.04}, "radius: expected a positive length"),
     ("scene", {"eps": 0.0}, "eps: expected a positive length"),
-    ("scene", {"units": "mm"}, "units: applies to a cloud file"),
     ("scene", {"T_base_sensor": np.ones((4, 4))}, "T_base_sensor: expected a rotation part"),
 ])
 def test_bad_input_is_refused(points, kwargs, message):
@@ -164,18 +163,20 @@ def test_bad_input_is_refused(points, kwargs, message):
 
 
 def test_from_a_file_with_nan_points(tmp_path):
-    from armkit.io.clouds import write_pcd
+    from armkit.io.clouds import read_cloud, write_pcd
 
     scene = random_scene(4, noise=0.002, n_points=N)
     points = scene.points.copy()
     points[::1000] = np.nan                                   # rays with no return
     path = write_pcd(tmp_path / "scan.pcd", points, "mm")
-    result = detect_target(path, radius=0.04)
+    result = detect_target(read_cloud(path), radius=0.04)
     assert result.success and result.dropped == len(points[::1000])
     assert result.file_units == "mm" and result.source == str(path)
     assert errors(result, scene)[0] < 1e-3
     with pytest.raises(ModelFileError, match="expected finite coordinates"):
-        detect_target(str(path), radius=0.04, nonfinite="refuse")
+        read_cloud(str(path), nonfinite="refuse")
+    with pytest.raises(InputError, match="cloud: expected points .* found the path"):
+        detect_target(str(path), radius=0.04)
     with pytest.raises(ValueError):                           # results are read-only
         result.T_sensor_target[0, 3] = 1.0
     mine = scene.points.copy()

@@ -4,9 +4,9 @@ and NumPy .npy.
 Every cloud has a length unit, m or mm: declared by the file (a comment such as ``# units: mm``
 in PCD, CSV and XYZ files, ``comment units mm`` in PLY) or given by the caller; neither is an
 error, and so is a caller's unit that contradicts the file's. The points come back in metres
-(`Cloud.points`; the file's unit is `Cloud.file_units`) and their scale is checked: a scene
-less than 5 cm across (a cloud in metres read as millimetres) or with a median range beyond
-1 km (millimetres read as metres) is refused.
+(`armkit.perception.cloud.Cloud`: `points`, and the file's unit as `file_units`) and their
+scale is checked (`check_scale`): a scene less than 5 cm across (a cloud in metres read as
+millimetres) or with a median range beyond 1 km (millimetres read as metres) is refused.
 
 PCD files are read as PCL writes them (its `PCDWriter`): ``DATA binary_compressed`` (the
 default of PCL's tools: the fields one after another, LZF-compressed, decoded here), binary
@@ -27,10 +27,9 @@ from __future__ import annotations
 
 import re
 import struct
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from io import BytesIO
 from pathlib import Path
-from types import MappingProxyType
 from typing import Literal, Mapping, Sequence
 
 import numpy as np
@@ -39,11 +38,10 @@ from numpy.typing import ArrayLike, NDArray
 from armkit.errors import InputError, ModelFileError
 from armkit.io.documents import LARGEST, found_text, number_from_text, read_bytes
 from armkit.jit import kernel
+from armkit.perception.cloud import Cloud, check_scale
 
 UNITS = {"m": 1.0, "mm": 1e-3}
 SUFFIXES = (".pcd", ".ply", ".csv", ".xyz", ".txt", ".npy")
-MIN_EXTENT = 0.05           # m: smaller scenes are taken for metres read as millimetres
-MAX_RANGE = 1000.0          # m: larger median ranges are taken for millimetres read as metres
 MAX_BYTES = 512 * 2**20
 """The largest cloud file read by default (bytes); `read_cloud`'s ``max_bytes`` raises it."""
 MAX_POINTS = 200_000_000    # points of one cloud: 2.4 GB of float32 x, y, z
@@ -59,90 +57,6 @@ _UNIT_COMMENT = re.compile(rb"\bunits?\s*[:=]?\s*(mm|m)\b", re.IGNORECASE)
 # (NumPy's float parser also takes 1_000 as 1000: an underscore is not let through.)
 _TEXT_NUMBER_BYTES = np.zeros(256, bool)
 _TEXT_NUMBER_BYTES[list(b"0123456789+-.eE \t\r\nnaNAifIFtyTY")] = True
-
-
-@dataclass(frozen=True)
-class Cloud:
-    """Points read from a file, in metres, with what else the file holds per point.
-
-    Attributes
-    ----------
-    points : ndarray, shape (N, 3)
-        Finite points, m (whatever the file's unit).
-    file_units : {"m", "mm"}
-        The length unit the file's numbers are in (declared by the file or given by the caller);
-        `points` are converted from it.
-    dropped : int
-        Points with NaN or inf that were dropped.
-    path : str
-        The file as given.
-    fields : mapping of str to ndarray, shape (N,)
-        Extra per-point fields kept by name (intensity, ring, timestamp, ...), as the file's
-        numbers (not converted), for the points kept.
-    index : ndarray, shape (N,), int
-        Each point's place in the file (row-major in an organised cloud: row = index // width).
-    width, height : int
-        The file's grid: an organised cloud (a depth camera's image, a LiDAR's rings by
-        columns) has height > 1; an unorganised one has height 1 and width the point count.
-    """
-
-    points: NDArray
-    file_units: str
-    dropped: int
-    path: str
-    fields: Mapping[str, NDArray] = field(default_factory=dict)
-    index: NDArray | None = None
-    width: int = 0
-    height: int = 1
-
-    def __post_init__(self):
-        if self.index is None:
-            object.__setattr__(self, "index", np.arange(len(self.points)))
-        if not self.width:
-            object.__setattr__(self, "width", len(self.points))
-        for value in (self.points, self.index, *self.fields.values()):
-            value.flags.writeable = False
-        object.__setattr__(self, "fields", MappingProxyType(dict(self.fields)))
-
-    @property
-    def organized(self) -> bool:
-        """Whether the file's points form a grid of more than one row."""
-        return self.height > 1
-
-
-def check_scale(points: NDArray, source: str, *, file: bool = True) -> None:
-    """Refuse points (m) whose scale suggests the wrong unit.
-
-    Parameters
-    ----------
-    points : ndarray, shape (N, 3), m
-    source : str
-        The file the points came from, or the argument's name.
-    file : bool
-        Whether `source` is a file (a ModelFileError) or an argument (an InputError).
-
-    Raises
-    ------
-    ModelFileError or InputError
-        When the middle 98 % of the points spans less than 5 cm, or their median distance from
-        the sensor exceeds 1 km.
-    """
-    sample = points[::max(len(points) // 10_000, 1)]        # a few thousand points suffice
-    lo, hi = np.percentile(sample, [1, 99], axis=0)
-    extent = float(np.linalg.norm(hi - lo))
-    median_range = float(np.median(np.linalg.norm(sample, axis=1)))
-    problem = None
-    if len(points) >= 10 and extent < MIN_EXTENT:
-        problem = ("a scene at least 5 cm across (is the unit right? a cloud in metres read as "
-                   "millimetres shrinks 1000 times)", f"{extent * 1e3:.3g} mm across")
-    elif median_range > MAX_RANGE:
-        problem = ("points within 1 km of the sensor (is the unit right? a cloud in "
-                   "millimetres read as metres grows 1000 times)",
-                   f"a median range of {median_range:.4g} m")
-    if problem:
-        if not file:
-            raise InputError(f"{source}: expected {problem[0]}, found {problem[1]}")
-        raise ModelFileError(source, "points", *problem)
 
 
 def _declared_unit(path: str, comments: list[bytes]) -> str | None:

@@ -55,7 +55,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from armkit.errors import InputError
-from armkit.io.clouds import Cloud, check_scale, read_cloud
+from armkit.perception.cloud import Cloud, check_scale
 from armkit.perception.circles import Circle, fit_circle
 from armkit.perception.clusters import dbscan
 from armkit.perception.filters import statistical_outliers, voxel_downsample
@@ -370,10 +370,8 @@ def _no_target(kind: str, considered: list[Candidate], k: float, unit: str) -> s
             f"{best.describe(k, unit)}, is not one: {best.reason}")
 
 
-def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe", "hole"] = "pipe",
-                  radius: float | None = None, units: str | None = None,
-                  nonfinite: Literal["drop", "refuse"] = "drop",
-                  T_base_sensor: ArrayLike | None = None, plane_threshold: float | None = None,
+def detect_target(cloud: ArrayLike | Cloud, *, kind: Literal["pipe", "hole"] = "pipe",
+                  radius: float | None = None, T_base_sensor: ArrayLike | None = None, plane_threshold: float | None = None,
                   min_height: float | None = None, eps: float | None = None,
                   min_samples: int = 5, min_cluster: int = 30, max_extent: float = 0.3,
                   choose: Literal["largest", "nearest", "highest"] = "largest",
@@ -384,16 +382,11 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
 
     Parameters
     ----------
-    cloud_or_path : array_like (N, 3) in m, a `Cloud`, or a cloud file's path
-        A file is read with `armkit.io.clouds.read_cloud` (`units` and `nonfinite` apply); a
-        cloud's ``ring`` field, if it has one, gives the rows.
+    cloud : array_like (N, 3) in m, or a `Cloud` (a file's: `armkit.io.clouds.read_cloud`)
+        A cloud's ``ring`` field, if it has one, gives the rows.
     kind : {"pipe", "hole"}
     radius : float or None
         The inlet's known radius (m), or None to fit it.
-    units : {"m", "mm"} or None
-        The cloud file's length unit, when the file does not declare it.
-    nonfinite : {"drop", "refuse"}
-        For a file: drop points with NaN or inf (and count them) or refuse the file.
     T_base_sensor : array_like (4, 4) or None
         The sensor's pose in the robot's base frame (m); gives `T_base_target`.
     plane_threshold : float or None
@@ -433,23 +426,20 @@ def detect_target(cloud_or_path: ArrayLike | str | Path, *, kind: Literal["pipe"
 
     Raises
     ------
-    InputError, ModelFileError
-        Bad arguments, an empty cloud, NaN/inf in an array, an unreadable or implausible file.
+    InputError
+        Bad arguments, an empty cloud, NaN/inf in an array, points not in metres.
     """
     info: dict = {}
-    if units is not None and not isinstance(cloud_or_path, (str, Path)):
-        raise InputError(f"units: applies to a cloud file; points given as an array are in m, "
-                         f"found units={units!r} with an array")
-    if isinstance(cloud_or_path, (str, Path)):
-        cloud_or_path = read_cloud(cloud_or_path, units=units, nonfinite=nonfinite)
-    if isinstance(cloud_or_path, Cloud):
-        info.update(dropped=cloud_or_path.dropped, source=cloud_or_path.path,
-                    file_units=cloud_or_path.file_units)
-        p = cloud_or_path.points
-        if rings is None and "ring" in cloud_or_path.fields:
-            rings = cloud_or_path.fields["ring"]
+    if isinstance(cloud, (str, Path)):
+        raise InputError(f"cloud: expected points (N, 3) in m or a Cloud (a file's: "
+                         f"armkit.io.clouds.read_cloud), found the path {str(cloud)[:200]!r}")
+    if isinstance(cloud, Cloud):
+        info.update(dropped=cloud.dropped, source=cloud.path, file_units=cloud.file_units)
+        p = cloud.points
+        if rings is None and "ring" in cloud.fields:
+            rings = cloud.fields["ring"]
     else:
-        p = points_array(cloud_or_path)
+        p = points_array(cloud)
         check_scale(p, "points", file=False)
     if kind not in ("pipe", "hole"):
         raise InputError(f"kind: expected 'pipe' or 'hole', found {kind!r}")

@@ -620,7 +620,7 @@ def reach_map(robot: Robot, resolution: float | None = None,
         _run_local(plan, todo, threads, finished)
     elif todo:
         _run_dask(plan, todo, scheduler, finished)
-    from armkit import __version__
+    from importlib.metadata import version
 
     ordered = [results[i] for i in range(plan.chunks)]
     arrays = dict(voxels=voxels,
@@ -633,7 +633,7 @@ def reach_map(robot: Robot, resolution: float | None = None,
                 "chunk": chunk, "obstacles": None if scene is None else len(scene),
                 "collision_resolution": collision_resolution, "key": key,
                 "robot": robot_key(robot),
-                "armkit": __version__}
+                "armkit": version("armkit")}
     return ReachMap(robot, h, orientations=chosen, settings=settings, **arrays)
 
 
