@@ -230,6 +230,24 @@ def test_a_motion_beyond_the_limits_fails_its_checks_before_anything_is_sent(dem
     assert isinstance(fast, Motion)
 
 
+def test_the_torques_are_checked_before_anything_is_sent(demo_result):
+    """For a robot with inertias the checks hold the joint torques along the motion within the
+    torque limits: the demo's motion holds them, the same motion with a 5 kg payload on the
+    water-supply arm's lift does not (its 180 N limit: the arm alone needs about 177 N)."""
+    task, motion = demo_result.task, demo_result.motion
+    torques = demo_result.checks.torques
+    assert demo_result.checks.success and torques.within
+    t = np.linspace(motion.trajectory.start, motion.trajectory.end, 500)
+    s = motion.trajectory.sample(t)
+    independent = armkit.inverse_dynamics(task.robot, s.q, s.qd, s.qdd)
+    assert np.abs(independent).max(axis=0) == pytest.approx(torques.peak, rel=0.02)
+    loaded = replace(task, robot=armkit.with_payload(task.robot, 5.0))
+    checks = check_motion(loaded, motion, task.drive.register_map)
+    verdict = dict(checks.items)["joint torques within the limits"]
+    assert not checks.success and verdict.startswith("lift at 1.")
+    assert checks.reason == f"joint torques within the limits: {verdict}"
+
+
 @pytest.mark.parametrize("name", ["modular_4dof", "inspection_6dof", "tool_changer_6dof"])
 def test_each_example_obstacle_blocks_the_straight_motion(name):
     task = load_task(EXAMPLES / f"{name}.task.yaml")

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from armkit.drives import DriveClient, RegisterMap, check_waypoints
+from armkit.dynamics import TorqueProfile, torque_profile
 from armkit.errors import DriveError, InputError
 from armkit.io.tasks import CloudTarget, Task
 from armkit.kinematics.forward import fk
@@ -134,11 +135,14 @@ class MotionChecks:
     ----------
     items : tuple of (str, str)
         (check, verdict) pairs, in the order they ran.
+    torques : TorqueProfile or None
+        The joint torques along the motion, for a robot with inertias.
     """
 
     success: bool
     reason: str
     items: tuple[tuple[str, str], ...] = ()
+    torques: TorqueProfile | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -321,8 +325,10 @@ def smooth_motion(task: Task, path: NDArray, checker: CollisionChecker) -> Motio
 def check_motion(task: Task, motion: Motion, register_map: RegisterMap) -> MotionChecks:
     """What must hold before anything is sent: the motion within the joint limits at every
     instant (positions at 1 kHz; velocity, acceleration and jerk by their exact peaks,
-    `armkit.trajectory.bounds.peaks`), and the waypoints as the drive will take them
-    (`armkit.drives.check_waypoints`: limits, timing, what the registers can hold)."""
+    `armkit.trajectory.bounds.peaks`), for a robot with inertias its joint torques within the
+    torque limits (`armkit.dynamics.torque_profile`, payload and friction included), and the
+    waypoints as the drive will take them (`armkit.drives.check_waypoints`: limits, timing,
+    what the registers can hold)."""
     robot, tr = task.robot, motion.trajectory
     items = []
     q = tr.evaluate(np.linspace(tr.start, tr.end, max(2, math.ceil(tr.duration * 1000) + 1)))
@@ -337,13 +343,22 @@ def check_motion(task: Task, motion: Motion, register_map: RegisterMap) -> Motio
         items.append((f"joint {name} within the limits",
                       "ok" if ratio[j] <= 1 + LIMIT_SLACK else
                       f"{robot.joint_names[j]} at {ratio[j]:.3f} times its limit"))
+    torques = None
+    if robot.inertia is not None:
+        torques = torque_profile(robot, tr)
+        j = int(np.argmax(torques.ratio))
+        items.append(("joint torques within the limits",
+                      "ok" if torques.within else
+                      f"{robot.joint_names[j]} at {torques.ratio[j]:.3f} times its limit "
+                      f"({torques.peak[j]:.4g} of {torques.limits[j]:.4g} "
+                      f"{'N m' if robot.chain.revolute[j] else 'N'})"))
     try:
         check_waypoints(register_map, motion.q, motion.t)
         items.append(("waypoints as the drive takes them", "ok"))
     except InputError as err:
         items.append(("waypoints as the drive takes them", str(err)))
     failed = [f"{what}: {verdict}" for what, verdict in items if verdict != "ok"]
-    return MotionChecks(not failed, failed[0] if failed else "ok", tuple(items))
+    return MotionChecks(not failed, failed[0] if failed else "ok", tuple(items), torques)
 
 
 class _Reports:

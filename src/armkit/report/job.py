@@ -33,11 +33,12 @@ from armkit.job.run import JobResult
 from armkit.job.steps import motion_limits
 from armkit.kinematics.forward import fk, fk_frames
 from armkit.report.text import figure_text, page_text
+from armkit.report.dynamics import torque_figure
 from armkit.report.trajectory import motion_figure
 from armkit.report.view import obstacle_mesh, plotly_script, show
 from armkit.spatial import matrix_to_rpy
 
-FILES = ("summary.json", "joints.png", "tool_path.png", "report.html")
+FILES = ("summary.json", "joints.png", "torques.png", "tool_path.png", "report.html")
 """What `write_report` writes, in this order: the record first."""
 
 STYLE = """
@@ -160,6 +161,10 @@ def summary(result: JobResult) -> dict:
                                                                           per_s)],
                                   _peaks(robot, motion.trajectory)))},
         "checks": None if result.checks is None else dict(result.checks.items),
+        "torques": None if result.checks is None or result.checks.torques is None else {
+            "peak": [_num(x, 4) for x in result.checks.torques.peak],
+            "limit": [_num(x, 4) for x in result.checks.torques.limits],
+            "units": ["N m" if r else "N" for r in robot.chain.revolute]},
         "waypoints": None if motion is None or motion.q is None else {
             "t_s": np.round(motion.t, 4).tolist(), "q": _q(robot, motion.q)},
         "sent": None if sent is None else {"waypoints": sent.waypoints,
@@ -281,7 +286,8 @@ def _png(fig: Figure, path: Path) -> bytes:
 
 def write_report(result: JobResult, folder: str | Path) -> list[Path]:
     """Write the report into `folder`: ``summary.json`` first, then the figures
-    (``joints.png``, ``tool_path.png``), then ``report.html``, which holds them all.
+    (``joints.png``; ``torques.png`` for a robot with inertias; ``tool_path.png``), then
+    ``report.html``, which holds them all.
 
     Returns
     -------
@@ -306,6 +312,10 @@ def write_report(result: JobResult, folder: str | Path) -> list[Path]:
         fig = motion_figure(robot, motion.trajectory, vmax=V, amax=A, jmax=J)
         figures.append(("Joint motion (limits dashed)", _png(fig, folder / "joints.png")))
         written.append(folder / "joints.png")
+    if result.checks is not None and result.checks.torques is not None:
+        fig = torque_figure(robot, result.checks.torques)
+        figures.append(("Joint torques (limits dashed)", _png(fig, folder / "torques.png")))
+        written.append(folder / "torques.png")
     if result.target is not None and result.target.T_base_target is not None:
         figures.append(("The tool's path around the obstacles",
                         _png(tool_path_figure(result), folder / "tool_path.png")))
@@ -437,7 +447,7 @@ def _page(result: JobResult, doc: dict, figures: list[tuple[str, bytes]]) -> str
     parts += ["<h2>Timings</h2>", _table(["step", "s"], [[k, f"{v:.3f}"] for k, v in
                                                        result.timings.items()], left=1),
               '<p class="note">Beside this page: summary.json (everything above, machine '
-              "readable), joints.png and tool_path.png. The page needs nothing else.</p>"]
+              "readable) and the figures as PNG files. The page needs nothing else.</p>"]
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>armkit run: {page_text(task.name)}</title><style>{STYLE}</style>"
             f"<script>{plotly_script()}</script></head><body><main>\n"
