@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.spatial.transform import Rotation
 
+from armkit import jit
 from armkit import spatial as sp
 from armkit.errors import InputError
 
@@ -56,6 +57,10 @@ def test_rpy_at_gimbal_lock_sets_yaw_to_zero_as_scipy_does(sign):
                            rng.uniform(-3, 3, 500)])
     R = sp.rpy_to_matrix(rpy)
     ours = sp.matrix_to_rpy(R)
+    # numba's compiler records warnings through the process-wide warnings module (not
+    # thread-safe): while armkit's background thread compiles, another thread's warnings
+    # can go to numba's record instead. Nothing compiles during the check below.
+    jit.wait_for_background()
     with pytest.warns(UserWarning, match="Gimbal lock"):
         theirs = Rotation.from_matrix(R).as_euler("xyz")
     assert np.all(ours[:, 2] == 0.0)
