@@ -282,6 +282,7 @@ print(json.dumps({"python": python, "compiled": compiled, "numba_imported": numb
 """
 
 
+@pytest.mark.slow
 def test_python_and_compiled_tiers_give_the_same_results():
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     result = subprocess.run([sys.executable, "-c", TIERS, root], capture_output=True, text=True,

@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -27,6 +29,7 @@ def python_blocks() -> list[str]:
     return [part.split("```", 1)[0] for part in parts]
 
 
+@pytest.mark.slow
 def test_readme_python_blocks_run_in_order(monkeypatch):
     """Each block runs as written, in one namespace, from the repository's root (the paths
     in the examples are relative to it); a block may use the names of the ones before it."""

@@ -17,6 +17,8 @@ from armkit.io.measurements import read_measurements
 from armkit.spatial import invert
 from tests.calibration.synthetic import handeye_data
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 EXAMPLES = Path(__file__).parents[2] / "examples" / "calibration"
 
 

@@ -8,8 +8,11 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 import armkit
+
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
 
 
 def armkit_ik(*args: str) -> subprocess.CompletedProcess:

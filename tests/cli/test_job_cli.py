@@ -17,6 +17,8 @@ import yaml
 
 from tests.report.browser import Browser
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 ROOT = Path(__file__).parents[2]
 EXAMPLES = ROOT / "examples" / "tasks"
 TASKS = sorted(EXAMPLES.glob("*.task.yaml"))

@@ -18,6 +18,8 @@ from armkit.calibration import camera_to_base
 from armkit.io.camera import read_camera_mount
 from armkit.perception import detect_target, synthetic_scene
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 EXAMPLES = Path(__file__).parents[2] / "examples" / "perception"
 SCAN, POSE = str(EXAMPLES / "inlet_scan.pcd"), str(EXAMPLES / "sensor_to_base.yaml")
 runner = CliRunner()

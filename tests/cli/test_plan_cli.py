@@ -8,10 +8,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import armkit
 from armkit.io.scene import read_planning_problem
 from armkit.planning import CollisionChecker, Scene, default_geometry
+
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
 
 SHELF = str(Path(__file__).parents[2] / "examples" / "shelf.scene.yaml")
 

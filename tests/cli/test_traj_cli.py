@@ -14,6 +14,8 @@ from typer.testing import CliRunner
 
 from armkit.cli import app
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = str(ROOT / "examples" / "tool_changer_table1.yaml")

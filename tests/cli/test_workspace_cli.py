@@ -17,6 +17,8 @@ import armkit
 import armkit.cli.workspace as command
 from armkit.cli import app
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 runner = CliRunner()
 
 

@@ -248,6 +248,7 @@ def mutate_waypoints(text: str, rng: np.random.Generator) -> bytes:
     return bytes(data)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("suffix", ["csv", "json"])
 def test_fuzzed_waypoint_files(tmp_path, suffix):
     rng = np.random.default_rng(SEED + 1 + (suffix == "json"))

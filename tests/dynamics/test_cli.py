@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -17,6 +18,8 @@ from typer.testing import CliRunner
 import armkit
 from armkit.cli import app
 from armkit.dynamics import gravity_torques, inverse_dynamics, mass_matrix, with_payload
+
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
 
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[2]

@@ -61,6 +61,7 @@ def test_a_robot_without_a_urdf_has_no_visuals():
     assert read_visuals(armkit.robot("ur5")) is None
 
 
+@pytest.mark.slow
 def test_view_draws_a_urdfs_visual_meshes(tmp_path):
     out = tmp_path / "so101.html"
     done = subprocess.run([sys.executable, "-m", "armkit", "view",

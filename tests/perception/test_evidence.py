@@ -121,6 +121,7 @@ def test_ring_scans_never_give_a_wrong_hole(rings):
         assert not detect_target(wall.points, kind="hole").success
 
 
+@pytest.mark.slow
 def test_api_and_cli_make_one_decision_on_one_file(tmp_path):
     for seed, target in ((2, "pipe"), (3, None)):
         scene = cluttered_scene(seed, target, ("box", "dome", "handle"))

@@ -51,6 +51,7 @@ def test_start_and_goal_free_in_different_compartments(problem, checker):
     assert 0.42 < tool_goal[2] < 0.75                                # upper compartment
 
 
+@pytest.mark.slow
 def test_the_straight_joint_line_collides(problem, checker):
     start, goal = problem.start, problem.goal[0]
     assert not checker.edge_valid(start, goal)[0]

@@ -38,6 +38,7 @@ def step_of(checker):
     return 0.2 * float(np.linalg.norm(checker.upper - checker.lower))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planner", PLANNERS)
 def test_same_seed_same_path_whatever_the_first_tree_size(shelf_checker, planner):
     """The trees start with 8 rows and are grown many times, or start large: the same seed
@@ -107,6 +108,7 @@ def test_goal_cut_off_ends_with_the_budget_reason(tmp_path, planner):
     assert result.iterations == 400
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(4))
 def test_compiled_paths_pass_the_dense_check(shelf_checker, seed):
     """RRT-Connect's raw path, the shortcut path and 10 waypoints: certified and found free by
@@ -136,6 +138,7 @@ def test_compiled_shortcut_on_a_free_scene_ends_straight():
     assert checked > 0
 
 
+@pytest.mark.slow
 def test_random_scene_every_planner():
     robot = armkit.robot("inspection_6dof")
     checker = CollisionChecker(robot, random_scene(21, count=6, reach=1.0),
@@ -185,6 +188,7 @@ def test_single_state_call_refuses_non_finite(shelf_checker):
         shelf_checker.valid(np.zeros(5))
 
 
+@pytest.mark.slow
 def test_edges_and_paths_from_python_match_the_dense_reference(shelf_checker):
     robot = shelf_checker.robot
     Q = random_q(robot, 200, seed=8)
@@ -205,6 +209,7 @@ def test_edges_and_paths_from_python_match_the_dense_reference(shelf_checker):
     assert not shelf_checker.path_valid(np.vstack([SHELF_START, SHELF_GOAL]))
 
 
+@pytest.mark.slow
 def test_parallel_batch_gives_the_serial_values(shelf_checker):
     """The batch spread over threads (chunks each starting afresh) returns exactly what the
     serial kernel does, exact distances and verdicts alike, and both agree with the

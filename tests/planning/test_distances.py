@@ -11,6 +11,7 @@ from armkit.spatial import pose_from_xyz_rpy
 from tests.planning.reference import point_distance, segment_obstacle, segment_segment
 
 
+@pytest.mark.slow
 def test_closed_forms():
     box = Box([2.0, 2.0, 2.0])                          # the cube |x| <= 1
     # A segment parallel to a face, 0.5 above it; one crossing the box; one past a corner.

@@ -52,6 +52,7 @@ def two_link(tmp_path_factory):
     return path
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("planner", ["rrtconnect", "rrtstar"])
 def test_a_fresh_process_keeps_a_short_time_limit(two_link, tmp_path, planner):
     """The first plan() of a fresh process with an empty numba cache (every kernel runs as
@@ -149,6 +150,7 @@ def test_the_checker_matches_an_independent_sphere_checker(mbm_problems, arm):
         np.testing.assert_array_equal(checker.valid(Q), (obstacle > 0) & (own > 0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("arm", ["ur5", "panda"])
 def test_planned_paths_pass_the_independent_dense_check(mbm_problems, arm):
     robot, problems, independent = mbm_problems[arm]

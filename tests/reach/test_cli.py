@@ -22,6 +22,8 @@ from armkit.cli import app
 from armkit.io.reach_maps import ChunkFolder, read_map
 from armkit.reach import reach_map
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[2]
 WATER = armkit.robot("water_supply")

@@ -50,6 +50,7 @@ def test_a_voxels_index_is_brute_force_ik_over_its_orientations(ur5_map):
     ("puma560", Orientations.sphere(24)),
     ("modular_4dof", 12),
     ("water_supply", 8)])
+@pytest.mark.slow
 def test_closed_form_and_numeric_maps_agree(name, orientations):
     robot = armkit.robot(name)
     closed = reach_map(robot, 0.25, orientations, samples=200_000)

@@ -10,6 +10,8 @@ import armkit
 from armkit.io.reach_maps import ChunkFolder
 from armkit.reach import Orientations, reach_map
 
+pytestmark = pytest.mark.slow      # commands run as users run them: CI runs them all
+
 FIELDS = ("voxels", "count", "reached", "manipulability")
 
 

@@ -26,6 +26,7 @@ def _drawn(text: str) -> str:
     return title.get_text()
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:Glyph")          # characters the font lacks: boxes
 @settings(max_examples=200, deadline=None)
 @given(st.one_of(st.sampled_from(TRICKY), st.text(max_size=80)))

@@ -60,6 +60,7 @@ SLOW = ["panda", "tool_changer_6dof", "stanford", "puma560", "inspection_6dof", 
 
 @pytest.mark.parametrize("name", ["ur5", "water_supply", *[
     pytest.param(name, marks=pytest.mark.slow) for name in SLOW]])
+@pytest.mark.slow
 def test_sliders_move_the_arm_as_armkit_fk(name, tmp_path):
     robot = armkit.robot(name)
     page = tmp_path / f"{name}.html"
