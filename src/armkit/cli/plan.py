@@ -26,8 +26,8 @@ def plan_command(
     seed: Annotated[int | None, typer.Option(help="Seed (default: the file's).",
                                              parser=number(*SEED, integer=True))] = None,
     time_limit: Annotated[float | None, typer.Option(
-        "--time-limit", help="Seconds for the whole search (default: the file's, else 10).")
-    ] = None,
+        "--time-limit", help="Seconds for the whole search, at most 3600 (default: the "
+        "file's, else 10).", parser=number(0.0, 3600.0, unit="s"))] = None,
     waypoints: Annotated[int | None, typer.Option(
         help="Resample the path to N waypoints evenly spaced in joint space.")] = None,
     out: Annotated[Path | None, typer.Option(
@@ -40,8 +40,6 @@ def plan_command(
     if planner is not None and planner not in PLANNERS:
         raise InputError(f"--planner: expected one of {', '.join(PLANNERS)}, found "
                          f"{shown(planner)}")
-    if time_limit is not None and not time_limit >= 0:
-        raise InputError(f"--time-limit: expected seconds >= 0, found {time_limit:g}")
     if waypoints is not None and not 2 <= waypoints <= MAX_WAYPOINTS:
         raise InputError(f"--waypoints: expected a whole number from 2 to {MAX_WAYPOINTS}, "
                          f"found {waypoints}")
