@@ -181,6 +181,7 @@ def check_loaded(m: RegisterMap, doc: dict, rng: np.random.Generator) -> None:
     assert np.all(error <= bound)
 
 
+@pytest.mark.slow
 def test_fuzzed_register_maps(tmp_path):
     rng = np.random.default_rng(SEED)
     bases = base_documents()

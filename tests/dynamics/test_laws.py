@@ -134,6 +134,7 @@ def without_friction_and_armature(robot: armkit.Robot) -> armkit.Robot:
         robot.inertia, viscous=None, coulomb=None, armature=None))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5", "inspection_6dof", "water_supply"])
 def test_energy_is_kept_in_free_fall(name):
     """No friction, no torques: kinetic plus potential energy stays constant over 2 s of
@@ -221,6 +222,7 @@ def test_batches_match_single_calls(lead):
     assert many.shape == qdd.reshape(-1, 6).shape
 
 
+@pytest.mark.slow
 def test_large_batch_runs_in_parallel_with_the_same_results():
     robot = ROBOTS["ur5"]
     rng = np.random.default_rng(5)

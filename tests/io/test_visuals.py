@@ -22,6 +22,7 @@ CASES = [("so_arm_description/urdf/so101.urdf", "gripper_frame_link"),      # ST
          ("ur_description/urdf/ur5_robot.urdf", "tool0")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("file, tip", CASES)
 def test_visuals_sit_where_pinocchio_puts_them(file, tip):
     path = ROBOTS / file

@@ -101,6 +101,7 @@ def test_puma_solutions_include_every_roboticstoolbox_configuration():
             assert np.any(same_angles(robot, ours, theirs.q, tol=1e-6)), config
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["ur5", "inspection_6dof", "stanford"])
 def test_solution_count_matches_multistart_enumeration(name):
     """Every distinct solution that 300 random numeric starts find is a closed-form one, and

@@ -61,6 +61,7 @@ def test_the_straight_joint_line_collides(problem, checker):
     assert np.mean(np.array(gaps) <= 0) > 0.3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_rrtconnect_plans_it_and_the_dense_check_passes(problem, checker, seed):
     result = plan(checker, problem.start, problem.goal, planner="rrtconnect", seed=seed,

@@ -243,6 +243,7 @@ def test_hand_written_primitives_are_contained(arm_file):
     # Through the right finger's mimic joint (its leader, the left finger's, off the chain).
     ("panda_description/urdf/panda_collision.urdf", "panda_rightfinger", 36),
 ])
+@pytest.mark.slow
 def test_real_urdf_primitives_are_contained(suffix, tip, primitives):
     path = robot_file(suffix)
     robot = armkit.load_robot(path, tip=tip)
