@@ -52,14 +52,15 @@ def value_count(D, nj):
 
 @_inline
 def gravity_at(nj):
-    """Index in D of gravity (3, m/s^2, base frame): right after the chain's floats."""
-    return 14 * nj + 12
+    """Index in D of gravity (3, m/s^2, base frame): right after the chain's floats, where a
+    link after the last one would start."""
+    return link_at(nj, nj)
 
 
 @_inline
 def body_at(nj, i):
     """Index in D of body i's 10 parameters (in the kernel's joint frame i)."""
-    return 14 * nj + 15 + BODY * i
+    return link_at(nj, nj) + 3 + BODY * i
 
 
 @_inline

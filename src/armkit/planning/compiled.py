@@ -32,11 +32,6 @@ from armkit.planning.collision import (
     new_work,
 )
 
-# numba's cache keys a kernel on its own file only: these kernels compile collision.py's,
-# distances.py's, clock.py's and the kinematic core's code into themselves, so a change to those
-# kernels or to the model's layout must come with a change to this file (or a cleared cache),
-# else the cached planners read the new model with the old code. (Changed with the clustered
-# sphere model and the deadline of 2026-11-27.)
 _jit = kernel(cache=True, nogil=True)
 
 TRAPPED, ADVANCED, REACHED = 0, 1, 2
