@@ -4,7 +4,7 @@ than the modules it cannot do without.
 A package lists its public names once, as imports: those it needs at once at the top, the rest
 in an ``if TYPE_CHECKING:`` block (which type checkers and readers follow, and Python skips).
 `lazy_names` reads that block from the package's source and loads each of its names from its
-module at the first use.
+module at the first use; `public_names` gives ``__all__`` of a package without lazy names.
 """
 
 from __future__ import annotations
@@ -28,6 +28,17 @@ def _imports(text: str, indent: str) -> dict[str, str]:
             for name in names.strip("()").split(",") if name.strip()}
 
 
+def _source(package: str) -> str:
+    with open(sys.modules[package].__file__, encoding="utf-8") as file:
+        return file.read()
+
+
+def public_names(package: str) -> list[str]:
+    """A package's ``__all__`` when it loads everything at once: the names its top-level
+    ``from armkit... import ...`` statements bind."""
+    return [name for name in _imports(_source(package), "") if not name.startswith("_")]
+
+
 def lazy_names(package: str) -> tuple[Callable, Callable, list[str]]:
     """The package's ``__getattr__``, ``__dir__`` and ``__all__``.
 
@@ -35,13 +46,11 @@ def lazy_names(package: str) -> tuple[Callable, Callable, list[str]]:
     at its first use and kept in the package's namespace, so that later look-ups are plain
     attribute reads. ``__all__`` holds the names the package imports at the top, then those.
     """
-    module = sys.modules[package]
-    with open(module.__file__, encoding="utf-8") as file:
-        text = file.read()
+    text = _source(package)
     block = re.search(r"^if TYPE_CHECKING:.*\n((?:[ \t]+.*\n|\n)*)", text, re.M)
     homes = _imports(block.group(1), "    ") if block else {}
-    eager = [name for name in _imports(text, "") if not name.startswith("_")]
-    namespace = module.__dict__
+    eager = public_names(package)
+    namespace = sys.modules[package].__dict__
 
     def __getattr__(name: str):
         home = homes.get(name)

@@ -8,7 +8,6 @@ from armkit.kinematics.forward import fk, fk_frames, joint_frames
 from armkit.kinematics.jacobian import (condition_number, jacobian_analytic, jacobian_dot,
                                         manipulability, min_singular_value, pose_and_jacobian,
                                         singular_values, tool_acceleration, tool_velocity)
+from armkit.lazy import public_names
 
-__all__ = ["fk", "fk_frames", "joint_frames", "jacobian_analytic", "jacobian_dot",
-           "pose_and_jacobian", "tool_velocity", "tool_acceleration", "singular_values",
-           "manipulability", "min_singular_value", "condition_number"]
+__all__ = public_names(__name__)

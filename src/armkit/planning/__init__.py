@@ -18,6 +18,7 @@ The shelf of the benchmark: from the lower compartment to the upper one, around 
 (True, (10, 6))
 """
 
+from armkit.lazy import public_names
 from armkit.planning.collision import CollisionChecker, CollisionModel, displacement_weights
 from armkit.planning.geometry import (ArmGeometry, arm_geometry, default_geometry, disabled_pairs,
                                       primitive_capsule, urdf_geometry)
@@ -28,8 +29,4 @@ from armkit.planning.scene import Box, Capsule, Cylinder, Scene, Sphere
 from armkit.planning.smooth import path_length, resample, resample_keeping_vertices, shortcut
 from armkit.planning.spheres import spheres_from_mesh
 
-__all__ = ["Scene", "Box", "Sphere", "Cylinder", "Capsule", "ArmGeometry", "arm_geometry",
-           "default_geometry", "disabled_pairs", "spheres_from_mesh", "CollisionChecker",
-           "CollisionModel", "displacement_weights", "ValidityFunction", "PlanResult",
-           "PlanSettings", "PLANNERS", "plan", "goals_from_pose", "shortcut", "resample",
-           "resample_keeping_vertices", "path_length", "urdf_geometry", "primitive_capsule"]
+__all__ = public_names(__name__)

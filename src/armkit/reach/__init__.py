@@ -6,10 +6,9 @@ manipulability (a `ReachMap`); `base_placement` finds where to stand the robot s
 reaches every pose of a task (a `Placement`).
 """
 
+from armkit.lazy import public_names
 from armkit.reach.maps import IndexSection, MapChunk, ReachMap, reach_map
 from armkit.reach.orientations import Orientations, default_orientations
 from armkit.reach.placement import BaseGrid, Placement, base_placement, floor_grid, rail_grid
 
-__all__ = ["reach_map", "ReachMap", "MapChunk", "IndexSection", "Orientations",
-           "default_orientations", "base_placement", "Placement", "BaseGrid", "floor_grid",
-           "rail_grid"]
+__all__ = public_names(__name__)
