@@ -81,7 +81,8 @@ def demo_report(tmp_path_factory) -> Path:
     assert re.search(r"the tool is [0-9.]+ mm from the target", done.stdout)
     out = cwd / "armkit-demo"
     assert sorted(p.name for p in out.iterdir()) == ["joints.png", "report.html",
-                                                    "summary.json", "tool_path.png"]
+                                                    "summary.json", "tool_path.png",
+                                                    "torques.png"]
     return out
 
 
@@ -89,8 +90,9 @@ def test_the_report_holds_everything_it_shows(demo_report):
     page = (demo_report / "report.html").read_text()
     refs = _References()
     refs.feed(page)
-    # The figures are data URIs; no script, style or picture comes from anywhere else.
-    assert len([r for r in refs.found if r.startswith("data:image/png;base64,")]) == 2
+    # The figures (joints, torques, tool path) are data URIs; no script, style or picture
+    # comes from anywhere else.
+    assert len([r for r in refs.found if r.startswith("data:image/png;base64,")]) == 3
     assert all(r.startswith("data:") for r in refs.found), refs.found
     assert page.count("plotly.js v") == 1 or page.count("* plotly.js") == 1
 
@@ -164,7 +166,7 @@ def test_a_record_that_fails_after_the_motion_exits_3(tmp_path):
     assert job.returncode == 3, (rest, err)
     assert err.strip().count("\n") == 0 and "Traceback" not in err
     assert err.startswith("the motion is done (ok), but its record is incomplete: ")
-    assert "report.html" in err and "written: summary.json, joints.png, tool_path.png" in err
+    assert "report.html" in err and "written: summary.json, joints.png, torques.png, tool_path.png" in err
     assert json.loads((out / "summary.json").read_text())["success"]
 
 
@@ -187,7 +189,8 @@ def test_names_from_files_reach_the_report_as_text(tmp_path):
     page = page.replace("\\u002f", "/")
     assert "<script>alert(1)</script>" not in page and "<a href=" not in page
     assert "&lt;a href=&#x27;https://example.com&#x27;&gt;post&lt;/a&gt; &#36;x&#36;" in page
-    assert (tmp_path / "r" / "joints.png").stat().st_size > 10_000
+    for figure in ("joints.png", "torques.png", "tool_path.png"):
+        assert (tmp_path / "r" / figure).stat().st_size > 10_000
 
 
 @pytest.mark.parametrize("args, words", [

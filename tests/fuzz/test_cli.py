@@ -62,7 +62,9 @@ def calls(tmp: Path) -> list[list[str]]:
     out = []
     for v in POSITIVE:
         out += [["detect", CLOUD, "--radius", v], ["detect", CLOUD, "--eps", v],
-                ["accuracy", ACC, "--tolerance", v], ["plan", PLAN, "--time-limit", v]]
+                ["accuracy", ACC, "--tolerance", v]]
+    for v in NUMBER + ["-1", "1e300"]:             # 0 s is a time limit: "no path" at once
+        out += [["plan", PLAN, "--time-limit", v]]
     for v in TEXT:
         out += [["detect", CLOUD, "--kind", v], ["detect", CLOUD, "--units", v],
                 ["detect", CLOUD, "--choose", v], ["detect", CLOUD, "--nonfinite", v],

@@ -192,8 +192,11 @@ def read_planning_problem(path: str | Path, need_robot: bool = True) -> Planning
     units = Units(spec.units.length, spec.units.angle)
     obstacles = [obstacle_from_field(o, units) for o in spec.obstacles]
     if spec.scene is not None:
-        obstacles += list(read_moveit_scene(checked_path(spec.scene, path, "scene",
-                                                         Path(path).parent)))
+        moveit = checked_path(spec.scene, path, "scene", Path(path).parent)
+        if not moveit.is_file():
+            raise ModelFileError(path, "scene", "a MoveIt scene file (its path relative to "
+                                 "this file)", f"{found_text(spec.scene)}, which is not a file")
+        obstacles += list(read_moveit_scene(moveit))
     scene = Scene(obstacles)
     robot = None
     if spec.robot is not None:

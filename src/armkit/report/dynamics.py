@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 
 from armkit.dynamics.torques import TorqueProfile
 from armkit.model.robot import Robot
+from armkit.report.text import figure_text
 from armkit.report.trajectory import COLOURS, joint_label
 
 
@@ -55,7 +56,7 @@ def torque_figure(robot: Robot, profiles: TorqueProfile | Mapping[str, TorquePro
         limit = np.inf
         for k, (label, p) in enumerate(profiles.items()):
             colour = COLOURS[k % len(COLOURS)]
-            ax.plot(p.t, p.torque[:, j], color=colour, lw=1.2, label=label or None)
+            ax.plot(p.t, p.torque[:, j], color=colour, lw=1.2, label=figure_text(label) if label else None)
             beyond = np.abs(p.torque[:, j]) > p.limits[j]
             if beyond.any():
                 ax.plot(p.t[beyond], p.torque[beyond, j], ".", color="tab:red", ms=2)
@@ -78,5 +79,5 @@ def torque_figure(robot: Robot, profiles: TorqueProfile | Mapping[str, TorquePro
     if labels:
         fig.legend(handles, labels, loc="outside lower center", ncols=len(labels),
                    fontsize=8)
-    fig.suptitle(title or f"{robot.name}: joint torques", fontsize=11)
+    fig.suptitle(figure_text(title or f"{robot.name}: joint torques"), fontsize=11)
     return fig
