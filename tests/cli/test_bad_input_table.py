@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import time
 import traceback
 from pathlib import Path
 
@@ -23,7 +22,7 @@ EXAMPLE = str(ROOT / "examples" / "tool_changer_table1.yaml")
 MAP = str(ROOT / "examples" / "drives" / "inspection_6dof.map.yaml")
 LONG = "x" * 300
 P2P = ("--start=0,0,0,0,0,0", "--goal=30,0,0,0,0,0")
-ROW_SECONDS = 60        # a row slower than this has hung: every one fails before any real work
+ROW_SECONDS = 60        # a hang bound per row (the table's process is waited on this long each)
 
 # (arguments, words the one stderr line must hold). "{tmp}" is the folder of helper files
 # (see `helper_files`), made by the process that runs the table.
@@ -347,7 +346,7 @@ def _fill(args: tuple[str, ...], tmp: Path) -> list[str]:
 
 def run_table(tmp: Path) -> list[dict]:
     """Each row through CliRunner in this process: exit code, stdout, stderr, any exception
-    that escaped, and the seconds it took."""
+    that escaped."""
     from typer.testing import CliRunner
 
     from armkit.cli import app
@@ -356,11 +355,10 @@ def run_table(tmp: Path) -> list[dict]:
     runner = CliRunner()
     out = []
     for args, _ in ROWS:
-        start = time.perf_counter()
         result = runner.invoke(app, _fill(args, tmp))
         escaped = result.exception if not isinstance(result.exception, SystemExit) else None
         out.append({"exit": result.exit_code, "stdout": result.stdout,
-                    "stderr": result.stderr, "seconds": time.perf_counter() - start,
+                    "stderr": result.stderr,
                     "exception": "".join(traceback.format_exception(escaped))
                     if escaped else ""})
     return out
@@ -398,7 +396,6 @@ def test_bad_input_is_exit_2_and_one_line_naming_it(table, index):
     assert len(lines) == 1 and lines[0].startswith("armkit: "), result["stderr"]
     assert words in lines[0]
     assert result["stdout"] == "" and "Traceback" not in result["stderr"]
-    assert result["seconds"] < ROW_SECONDS
 
 
 # A few rows as the real command, each in its own process, all at once.

@@ -24,6 +24,7 @@ from xml.sax.saxutils import quoteattr
 
 from armkit.errors import ModelFileError
 from armkit.io.documents import found_text, read_bytes
+from armkit.io.urdf import robot_element
 
 MAX_SRDF_BYTES = 8 * 2**20
 """The largest SRDF file read (bytes); a humanoid's is about 200 kB."""
@@ -109,18 +110,7 @@ def read_srdf(path: str | Path, links=None) -> SRDF:
         or a pair names a link that `links` does not hold.
     """
     path = str(path)
-    data = read_bytes(path, MAX_SRDF_BYTES)
-    if b"<!ENTITY" in data:
-        raise ModelFileError(path, "", "an SRDF (XML) file without entity declarations",
-                             "<!ENTITY ...>")
-    try:
-        root = ET.fromstring(data)
-    except ET.ParseError as err:
-        raise ModelFileError(path, "", "a readable SRDF (XML) file",
-                             found_text(str(err))[1:-1]) from None
-    if root.tag != "robot":
-        raise ModelFileError(path, "", "a <robot> root element",
-                             f"<{found_text(str(root.tag))[1:-1]}>")
+    root = robot_element(path, read_bytes(path, MAX_SRDF_BYTES), "SRDF")
     known = None if links is None else set(links)
     disabled = []
     for k, element in enumerate(root.findall("disable_collisions")):

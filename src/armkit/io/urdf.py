@@ -270,23 +270,34 @@ def _mimic(item: _Element, path: str) -> tuple[str, float, float]:
     return leader, float(multiplier), float(offset)
 
 
-def _parse(path: str) -> ET.Element:
-    if path.lower().endswith(".xacro"):
-        data = _expand_xacro(path)
-    else:
-        data = read_bytes(path, MAX_URDF_BYTES)
+def robot_element(path: str, data: bytes, kind: str) -> ET.Element:
+    """The ``<robot>`` root of a URDF or SRDF document (`kind`: "URDF" or "SRDF"); entity
+    declarations are refused (their expansion can blow a few bytes up to gigabytes, and no
+    robot file needs them).
+
+    Raises
+    ------
+    ModelFileError
+    """
     if b"<!ENTITY" in data:
-        # Entity expansion can blow a few bytes up to gigabytes; no URDF needs it.
-        raise ModelFileError(path, "", "a URDF (XML) file without entity declarations",
-                             "<!ENTITY ...>")
+        article = "an" if kind == "SRDF" else "a"
+        raise ModelFileError(path, "", f"{article} {kind} (XML) file without entity "
+                             "declarations", "<!ENTITY ...>")
     try:
         root = ET.fromstring(data)
     except ET.ParseError as err:
-        raise ModelFileError(path, "", "a readable URDF (XML) file",
+        raise ModelFileError(path, "", f"a readable {kind} (XML) file",
                              found_text(str(err))[1:-1]) from None
     if root.tag != "robot":
-        raise ModelFileError(path, "", "a <robot> root element", f"<{found_text(root.tag)[1:-1]}>")
+        raise ModelFileError(path, "", "a <robot> root element",
+                             f"<{found_text(str(root.tag))[1:-1]}>")
     return root
+
+
+def _parse(path: str) -> ET.Element:
+    data = (_expand_xacro(path) if path.lower().endswith(".xacro") else
+            read_bytes(path, MAX_URDF_BYTES))
+    return robot_element(path, data, "URDF")
 
 
 def read_urdf(path: str | Path, tip: str | None = None) -> URDFTable:
